@@ -17,9 +17,61 @@ from ._terrain import wong_pressure as wong_pressure
 from ._terrain import wong_sinkage as wong_sinkage
 
 # --- wheel (chapter 4) ---
+from ._contact import ContactForces as ContactForces
+from ._contact import contact_forces as contact_forces
+from ._contact import max_sinkage as max_sinkage
+from ._contact import normal_stress as normal_stress
+from ._contact import rim_sinkage as rim_sinkage
+from ._contact import shear_displacement as shear_displacement
+from ._contact import shear_stress as shear_stress
+from ._wheel import Status as Status
+from ._wheel import WheelState as WheelState
+from ._wheel import solve_wheel as solve_wheel
 
 # --- tire (chapter 3) ---
+from ._tire import TireCoefficients as TireCoefficients
+from ._tire import TireParameters as TireParameters
+from ._tire import TireForces as TireForces
+from ._tire import TireSensitivities as TireSensitivities
+from ._tire import ShearForceVariationRatios as ShearForceVariationRatios
+from ._tire import tire_forces as tire_forces
+from ._tire import tire_forces_from_parameters as tire_forces_from_parameters
+from ._tire import tire_parameters as tire_parameters
+from ._tire import tire_force_sensitivities as tire_force_sensitivities
+from ._tire import shear_force_variation_ratios as shear_force_variation_ratios
+from ._tire import longitudinal_stiffness as longitudinal_stiffness
+from ._tire import lateral_stiffness as lateral_stiffness
+from ._tire import longitudinal_friction as longitudinal_friction
+from ._tire import lateral_friction as lateral_friction
+from ._tire import contact_pressure_constant as contact_pressure_constant
+from ._tire import shear_distribution as shear_distribution
+from ._tire import normalized_longitudinal_slip as normalized_longitudinal_slip
+from ._tire import normalized_lateral_slip as normalized_lateral_slip
+from ._tire import normalized_combined_slip as normalized_combined_slip
+from ._tire import pure_longitudinal_force as pure_longitudinal_force
+from ._tire import pure_lateral_force as pure_lateral_force
+from ._tire import longitudinal_slip as longitudinal_slip
+from ._tire import driving_slip as driving_slip
+from ._tire import braking_slip as braking_slip
+from ._tire import longitudinal_from_driving_slip as longitudinal_from_driving_slip
+from ._tire import driving_from_longitudinal_slip as driving_from_longitudinal_slip
+from ._tire import longitudinal_from_braking_slip as longitudinal_from_braking_slip
+from ._tire import braking_from_longitudinal_slip as braking_from_longitudinal_slip
 
 # --- empirical (chapter 2) ---
+from ._empirical import bekker_compaction_resistance as bekker_compaction_resistance
+from ._empirical import bekker_rolling_resistance as bekker_rolling_resistance
+from ._empirical import bekker_wheel_sinkage as bekker_wheel_sinkage
+from ._empirical import brixius as brixius
+from ._empirical import brixius_wheel_numeric as brixius_wheel_numeric
+from ._empirical import BrixiusTraction as BrixiusTraction
+from ._empirical import compare_motion_resistance as compare_motion_resistance
+from ._empirical import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
+from ._empirical import gross_traction_coefficient as gross_traction_coefficient
+from ._empirical import net_traction_coefficient as net_traction_coefficient
+from ._empirical import richmond_resistance as richmond_resistance
+from ._empirical import rolling_resistance_coefficient as rolling_resistance_coefficient
+from ._empirical import van_es_compaction_resistance as van_es_compaction_resistance
+from ._empirical import van_es_rolling_resistance as van_es_rolling_resistance
 
 __version__ = "0.1.0"

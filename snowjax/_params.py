@@ -39,11 +39,17 @@ def _leaf():
     return eqx.field(converter=_as_float)
 
 
-# Wong's rule (thesis, section 2.1.2): p_w is a third of the pressure at which the sinkage
-# reaches 95 % of z_w.  For the thesis's fresh snow z_w = 0.2717 * 0.736 m = 0.200 m, so
-# 0.95 z_w = 0.190 m; linear interpolation of the thesis's own plate data (Table 2.1,
-# rows 17-18: 36.96 kPa at 0.1865 m, 39.54 kPa at 0.1915 m) gives 38.77 kPa at 0.190 m.
-THESIS_P_W = 38_770.0 / 3.0  # [Pa] = 12.92 kPa
+# The thesis does not give p_w.  Table 4.1 lists an entry angle of 53.6747 deg, which is
+# exactly a sinkage z0 = D/2 (1 - cos theta0) = 0.1500 m = 0.75 z_w.  We take that state
+# as the no-shear equilibrium (eq. 4.14 with tau = 0) at F_z = 5 kN, the middle of the
+# thesis's FEA load range 3.5-7.5 kN (section 3.2), with the 0.235 m wide tyre below:
+# p_w = F_z / (r b int_0^theta0 -ln(Z) cos(theta) dtheta) = 85.55 kPa (computed once with
+# scipy.integrate.quad; tests/test_params.py re-derives it).
+THESIS_P_W = 85_549.0  # [Pa]
+# Wong's own rule (section 2.1.2: p_w is a third of the pressure at z = 0.95 z_w) applied
+# to the thesis's plate data (Table 2.1, rows 17-18: 36.96 kPa at 0.1865 m, 39.54 kPa at
+# 0.1915 m; 38.77 kPa at 0.95 z_w = 0.190 m).
+PLATE_RULE_P_W = 38_770.0 / 3.0  # [Pa] = 12.92 kPa
 # Section width of the P235/75R15 tyre whose nominal diameter (0.734 m) matches the
 # thesis's D = 0.736 m; the thesis does not state the width used.
 THESIS_TIRE_WIDTH = 0.235  # [m]
@@ -82,12 +88,15 @@ class WongSnow(eqx.Module):
         u_k = D / K = 73.6 and tan(phi) = 0.0787, for D = 0.736 m.  So z_w = 0.200 m,
         K = 10.0 mm, and c = 0.2165 p_w.
 
-        The thesis does not give p_w.  The default, 12.92 kPa, follows Wong's own rule
-        quoted in section 2.1.2 (p_w is a third of the pressure at which z = 0.95 z_w),
-        applied to the thesis's plate test of the same fresh snow (Table 2.1, Shoop's
-        200 kg/m^3 laboratory snow): 0.95 z_w = 0.190 m, where Table 2.1 reads
-        38.77 kPa.  That gives c = 2.80 kPa.  Override with `p_w=...`; the cohesion
-        follows the thesis ratio.
+        The thesis does not give p_w.  Its Table 4.1 entry angle, 53.6747 deg, is exactly
+        the sinkage z0 = 0.150 m = 0.75 z_w; the default p_w = 85.55 kPa makes that the
+        no-shear equilibrium (4.14) of the 0.736 m x 0.235 m tyre at 5 kN, the middle of
+        the thesis's FEA load range (3.5-7.5 kN).  Then c = 18.5 kPa.  (Wong's plate rule,
+        p_w = a third of the pressure at z = 0.95 z_w, applied to the thesis's plate data
+        of Table 2.1 would give 12.9 kPa — see `thesis_plate_rule_snow` — but a 0.2 m
+        layer with that p_w carries only 2.2 kN under this tyre, less than every FEA
+        load.)  Override with `p_w=...`; the cohesion follows the thesis
+        ratio.
 
         **Arguments:**
 
@@ -101,6 +110,21 @@ class WongSnow(eqx.Module):
             tan_phi=0.0787,
             shear_modulus=diameter / 73.6,
         )
+
+
+    @classmethod
+    def thesis_plate_rule_snow(cls, diameter: float = THESIS_DIAMETER) -> "WongSnow":
+        """The thesis's fresh snow (Table 4.1 ratios) with p_w from Wong's plate rule.
+
+        p_w = 12.92 kPa is a third of the pressure that the thesis's own plate test of
+        the same fresh snow (Table 2.1) reaches at z = 0.95 z_w = 0.190 m (38.77 kPa,
+        interpolated between rows 17 and 18); c = 0.2165 p_w = 2.80 kPa, z_w = 0.2717 D,
+        K = D / 73.6, tan phi = 0.0787.  A softer snow than `thesis_fresh_snow`: a
+        0.736 m x 0.235 m wheel bottoms out above about 2.2 kN.
+
+        **Arguments:** `diameter`: the wheel diameter D the ratios refer to [m].
+        """
+        return cls.thesis_fresh_snow(diameter=diameter, p_w=PLATE_RULE_P_W)
 
 
 class RigidWheel(eqx.Module):
@@ -180,12 +204,12 @@ class BekkerSoil(eqx.Module):
     def thesis_lab_snow(cls) -> "BekkerSoil":
         """Shoop's 200 kg/m^3 laboratory snow, as fitted in the thesis (section 2.1.1):
         n 1.0707148, k_c 3.43 kN/m^(n+1), k_phi 218.84215 kN/m^(n+2), from a 23 cm plate.
-        The thesis gives no shear strength for it; cohesion and tan(phi) are set to the
-        thesis's fresh-snow values of Table 4.1 (c = 2.80 kPa, tan phi = 0.0787)."""
+        The thesis gives no shear strength for this snow; cohesion 1.03 kPa and
+        phi 19.7 deg are borrowed from Wong's Snow (U.S.) set (see `snow_us`)."""
         return cls(
             n=1.0707148,
             k_c=3.43e3,
             k_phi=218.84215e3,
-            cohesion=0.2165 * THESIS_P_W,
-            tan_phi=0.0787,
+            cohesion=1.03e3,
+            tan_phi=math.tan(math.radians(19.7)),
         )

@@ -25,6 +25,12 @@ __all__ = [
 ]
 
 
+def _clip_negative(x) -> Array:
+    """max(x, 0) with gradient 1 at x = 0 (jnp.maximum would split it 1/2 : 1/2)."""
+    x = jnp.asarray(x)
+    return jnp.where(x >= 0, x, 0.0)
+
+
 def _safe_power(x: Array, n: Array) -> Array:
     """`x**n` for x >= 0 whose value *and gradient* are finite at x = 0."""
     positive = x > 0
@@ -52,7 +58,7 @@ def bekker_pressure(
 
     **Returns:** pressure p [Pa].
     """
-    z = jnp.maximum(jnp.asarray(sinkage), 0.0)
+    z = _clip_negative(sinkage)
     return (jnp.asarray(k_c) / jnp.asarray(width) + k_phi) * _safe_power(z, jnp.asarray(n))
 
 
@@ -92,7 +98,7 @@ def wong_pressure(
     **Returns:** normal pressure sigma [Pa].  It diverges logarithmically as z -> z_w;
     for z >= z_w (the plate stands on the base) the result is `+inf`, never NaN.
     """
-    z = jnp.maximum(jnp.asarray(sinkage), 0.0)
+    z = _clip_negative(sinkage)
     z_w = jnp.asarray(z_w)
     ratio = z / z_w
     below = ratio < 1.0
@@ -125,7 +131,7 @@ def reece_pressure(
     **Returns:** normal pressure sigma [Pa].
     """
     b = jnp.asarray(width)
-    z = jnp.maximum(jnp.asarray(sinkage), 0.0)
+    z = _clip_negative(sinkage)
     modulus = jnp.asarray(cohesion) * k_c_prime + jnp.asarray(unit_weight) * b * k_phi_prime
     return modulus * _safe_power(z / b, jnp.asarray(n))
 
