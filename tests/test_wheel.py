@@ -362,6 +362,8 @@ def test_float32_runs_without_nan():
     assert st.sinkage.dtype == jnp.float32
     assert np.all(np.isfinite(st.sinkage)) and np.all(np.isfinite(st.drawbar_pull))
     st64 = sj.solve_wheel(sj.RigidWheel(x["D"], x["b"]), sj.WongSnow(x["p_w"], x["z_w"], x["c"], x["tan_phi"], x["K"]), x["load"], x["slip"])
+    assert np.all((st.status == Status.CONVERGED) | (st.status == Status.BOTTOMED_OUT))
+    assert np.mean(st.status == st64.status) >= 0.97  # may differ right at the capacity
     ok = (st.status == Status.CONVERGED) & (st64.status == Status.CONVERGED)
-    assert ok.mean() > 0.9
+    assert ok.sum() > 100
     assert np.max(np.abs(st.sinkage[ok] / st64.sinkage[ok] - 1)) < 1e-3
