@@ -428,21 +428,20 @@ def contact_forces(
 
 
 def _broadcast_leaves(*trees):
+    """Cast every leaf to one floating dtype, broadcast them together and flatten.
+
+    Returns (broadcast shape, dtype, trees with 1-D leaves of the broadcast size).
+    """
     leaves = [jnp.asarray(x) for t in trees for x in jax.tree_util.tree_leaves(t)]
+    dtype = jnp.result_type(*leaves, float)
     shape = jnp.broadcast_shapes(*(x.shape for x in leaves))
-    return shape, [
-        jax.tree_util.tree_map(lambda x: jnp.broadcast_to(x, shape).reshape(-1), t)
-        for t in trees
-    ]
+    flat = lambda x: jnp.broadcast_to(jnp.asarray(x, dtype), shape).reshape(-1)  # noqa: E731
+    return shape, dtype, [jax.tree_util.tree_map(flat, t) for t in trees]
 
 
 @eqx.filter_jit
 def _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n):
-    dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, snow)), entry_angle, slip, float)
-    cast = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), t)  # noqa: E731
-    shape, (wheel, snow, theta0, slip) = _broadcast_leaves(
-        cast(wheel), cast(snow), cast(entry_angle), cast(slip)
-    )
+    shape, _, (wheel, snow, theta0, slip) = _broadcast_leaves(wheel, snow, entry_angle, slip)
     fn = lambda th, i, wh, sn: _contact_scalar(  # noqa: E731
         th, i, wh.diameter, wh.width, sn, shear, n
     )

@@ -270,11 +270,7 @@ def _safe_inputs(valid, wheel, snow, load, slip):
 
 @eqx.filter_jit
 def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps):
-    dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, snow)), load, slip, float)
-    cast = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, dtype), t)  # noqa: E731
-    shape, (wheel, snow, load, slip) = _broadcast_leaves(
-        cast(wheel), cast(snow), cast(load), cast(slip)
-    )
+    shape, dtype, (wheel, snow, load, slip) = _broadcast_leaves(wheel, snow, load, slip)
     valid = _valid_mask(wheel, snow, load, slip, shear)
     wheel, snow, load, slip = _safe_inputs(valid, wheel, snow, load, slip)
 
