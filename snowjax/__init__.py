@@ -74,4 +74,12 @@ from ._empirical import rolling_resistance_coefficient as rolling_resistance_coe
 from ._empirical import van_es_compaction_resistance as van_es_compaction_resistance
 from ._empirical import van_es_rolling_resistance as van_es_rolling_resistance
 
+# --- calibration (issue 5): snowjax/_fit.py ---
+
+# --- vehicle simulation (issue 7): snowjax/_sim.py ---
+
+# --- sweeps (issue 8): snowjax/_sweep.py ---
+
+# --- reproduction of the thesis (issue 6): snowjax/_reproduce.py, _derivatives.py ---
+
 __version__ = "0.1.0"

@@ -194,7 +194,18 @@ def _initial_guess(theta_cap, load, diameter, width, snow):
     return jax.lax.stop_gradient(_newton_s(residual, jnp.maximum(s, S_MIN), 3))
 
 
-def _solve_scalar(diameter, width, snow, load, slip, shear, n, max_steps):
+def _warm_start(guess, theta_cap):
+    """Solver start s0 from a previous entry angle (e.g. the last simulation step).
+
+    Non-finite or non-positive guesses fall back to theta_cap / 2.
+    """
+    ok = jnp.isfinite(guess) & (guess > 0)
+    ratio = jnp.clip(jnp.where(ok, guess, 0.5 * theta_cap) / theta_cap, jnp.exp(-(S_MAX**2)), 1.0)
+    s = jnp.sqrt(jnp.maximum(-jnp.log(ratio), S_MIN**2))
+    return jax.lax.stop_gradient(jnp.clip(s, S_MIN, S_MAX))
+
+
+def _solve_scalar(diameter, width, snow, load, slip, shear, n, max_steps, guess=None):
     dtype = load.dtype
     tol = _tolerance(dtype)
     theta_base = jnp.arccos(jnp.clip(1 - 2 * snow.z_w / diameter, -1.0, 1.0))
@@ -216,7 +227,10 @@ def _solve_scalar(diameter, width, snow, load, slip, shear, n, max_steps):
         w = forces(_theta_from_s(s, theta_cap), jnp.asarray(False))[0]
         return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
 
-    s0 = _initial_guess(theta_cap, target, diameter, width, snow)
+    if guess is None:
+        s0 = _initial_guess(theta_cap, target, diameter, width, snow)
+    else:
+        s0 = _warm_start(guess, theta_cap)
     solver = optx.Newton(rtol=tol, atol=tol)
     sol = optx.root_find(
         residual,
@@ -269,15 +283,17 @@ def _safe_inputs(valid, wheel, snow, load, slip):
 
 
 @eqx.filter_jit
-def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps):
-    shape, dtype, (wheel, snow, load, slip) = _broadcast_leaves(wheel, snow, load, slip)
+def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None):
+    shape, dtype, (wheel, snow, load, slip, guess) = _broadcast_leaves(
+        wheel, snow, load, slip, guess
+    )
     valid = _valid_mask(wheel, snow, load, slip, shear)
     wheel, snow, load, slip = _safe_inputs(valid, wheel, snow, load, slip)
 
-    def one(wh, sn, ld, sl):
-        return _solve_scalar(wh.diameter, wh.width, sn, ld, sl, shear, n, max_steps)
+    def one(wh, sn, ld, sl, gs):
+        return _solve_scalar(wh.diameter, wh.width, sn, ld, sl, shear, n, max_steps, gs)
 
-    theta0, r, t, m, status = jax.vmap(one)(wheel, snow, load, slip)
+    theta0, r, t, m, status = jax.vmap(one)(wheel, snow, load, slip, guess)
     nan = jnp.asarray(jnp.nan, dtype)
     out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
     return WheelState(
@@ -300,6 +316,7 @@ def solve_wheel(
     *,
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
+    initial_entry_angle: Float[ArrayLike, "..."] | None = None,
 ) -> WheelState:
     """Sinkage-versus-slip equilibrium of a rigid wheel on shallow snow, eq. (4.14).
 
@@ -330,6 +347,11 @@ def solve_wheel(
       >= 0, and for braking with the classic model; the braking extension of the
       simplified model (not defined by the thesis) is within about 1e-4.
     - `max_steps`: Newton iteration limit.
+    - `initial_entry_angle`: optional warm start theta0 [rad] (broadcasts like `load`),
+      e.g. the previous time step's `entry_angle` inside a simulation; it replaces the
+      closed-form no-shear initial guess.  Non-finite or non-positive values fall back
+      to half the largest admissible entry angle.  It changes only the iteration count,
+      never the converged result (and carries no gradient).
 
     **Returns:** `WheelState`.
 
@@ -352,4 +374,4 @@ def solve_wheel(
         raise TypeError(f"snow must be a snowjax.WongSnow, got {type(snow).__name__}")
     _validate_eagerly(wheel, snow, load, slip, shear)
     n = _nodes_for(shear, nodes_per_panel)
-    return _solve_wheel_jit(wheel, snow, load, slip, shear, n, int(max_steps))
+    return _solve_wheel_jit(wheel, snow, load, slip, shear, n, int(max_steps), initial_entry_angle)
