@@ -160,9 +160,9 @@ def _signed_mobilisation(x: Array) -> Array:
     continuous (1 at x = 0) and the second derivative jumps there.
     """
     positive = x >= 0
-    x_pos = jnp.where(positive, x, 0.0)
-    x_neg = jnp.where(positive, 0.0, x)
-    return jnp.where(positive, -jnp.expm1(-x_pos), jnp.expm1(x_neg))
+    # |x| written with `where` so that its derivative is +-1 (never 0) at x = 0.
+    magnitude = -jnp.expm1(-jnp.where(positive, x, -x))
+    return jnp.where(positive, magnitude, -magnitude)
 
 
 def janosi_hanamoto(
