@@ -184,7 +184,9 @@ def _newton_s(residual, s, steps):
     def step(_, s):
         f, df = jax.jvp(residual, (s,), (jnp.ones_like(s),))
         delta = jnp.where(df < 0, f / jnp.where(df < 0, df, -1.0), 0.0)
-        return jnp.clip(s - delta, S_MIN, 6.0)
+        # Damped: at s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a
+        # full step can overshoot to where W underflows (float32).
+        return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), S_MIN, S_MAX)
 
     return jax.lax.fori_loop(0, steps, step, s)
 
@@ -249,15 +251,15 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
         )
         return jax.vmap(fn)(theta0, slip, diameter, width, snow, bottomed)
 
-    # Capacity of the layer, W at s_min.  Without braking the shear stress only adds to W,
+    # Capacity of the layer, W at s_min.  For slip >= 0 the shear stress only adds to W,
     # so loads below the closed-form no-shear capacity are known to be carried and the
-    # quadrature is only needed if some element is heavier than that.
+    # quadrature is only needed if some element brakes or is heavier than that.
     s_min = jnp.full_like(load, S_MIN)
     theta_top = _theta_from_s(s_min, theta_cap)
     a = diameter / (2 * snow.z_w)
     z0_top = jnp.maximum(1 - max_sinkage(theta_top, diameter) / snow.z_w, 0.0)
     no_shear_capacity = diameter / 2 * width * _sigma_cos_integral(theta_top, z0_top, a, snow.p_w)
-    surely_carried = (no_shear_capacity > load * (1 + 1e-6)) & (not braking)
+    surely_carried = (no_shear_capacity > load * (1 + 1e-6)) & (slip >= 0)
     capacity = jax.lax.cond(
         jnp.all(surely_carried),
         lambda: jnp.full_like(load, jnp.inf),
@@ -369,7 +371,7 @@ def _safe_inputs(valid, wheel, snow, load, slip):
 
 # Elements solved together in one Newton iteration.  Chunks keep the quadrature's
 # (chunk, nodes) intermediates in cache and let each chunk stop iterating on its own.
-CHUNK_SIZE = int(__import__("os").environ.get("SNOWJAX_CHUNK", 1024))
+CHUNK_SIZE = 2048
 
 
 def _in_chunks(fn, args, size):
