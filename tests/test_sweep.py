@@ -1,0 +1,383 @@
+"""Chunked, resumable, sharded sweeps (`snowjax.sweep`, `snowjax sweep`).
+
+Every sweep here uses chunks of 8 rows with the default solver options, so the jitted
+solve compiles once per process (the reference `solve_wheel` calls use the same shape
+and share it).  The 4-device sharded sweep (a subprocess) and the notebook (a thread)
+start with the module, so their compiles overlap the other tests.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+import sys
+import textwrap
+import threading
+
+import numpy as np
+import pytest
+
+import snowjax as sj
+from snowjax import _sweep
+from snowjax._cli import main
+from tests.notebook_runner import outputs_text, run_notebook
+
+REPO = pathlib.Path(__file__).resolve().parents[1]
+C = 8  # chunk size of every sweep in this file
+WHEEL = sj.RigidWheel.thesis_tire()
+P_W = np.array([60e3, 85.55e3])
+SNOW = sj.WongSnow.thesis_fresh_snow(p_w=P_W)  # two parameter sets: p_w and cohesion vary
+LOADS = np.array([3000.0, 6000.0])
+SLIPS = np.linspace(0.0, 0.8, 5)
+N = P_W.size * LOADS.size * SLIPS.size  # 20 points: chunks of 8, 8 and 4 (padded)
+OUTPUTS = ("entry_angle", "sinkage", "motion_resistance", "thrust", "drawbar_pull", "torque")
+
+SHARDED_SCRIPT = textwrap.dedent(
+    """
+    import sys
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    import numpy as np
+    import snowjax as sj
+    assert len(jax.devices()) == 4, jax.devices()
+    r = sj.sweep(
+        sj.RigidWheel.thesis_tire(),
+        sj.WongSnow.thesis_fresh_snow(p_w=np.array([60e3, 85.55e3])),
+        np.array([3000.0, 6000.0]), np.linspace(0.0, 0.8, 5),
+        out=sys.argv[1], chunk_size=8, progress=False, formats=("npz",),
+    )
+    assert r.complete and r.computed_chunks == 3, r
+    """
+)
+
+
+class _Background:
+    """Slow, independent work started when the module starts (it overlaps the tests)."""
+
+    def __init__(self, tmp_path_factory, names):
+        self.sharded_out = tmp_path_factory.mktemp("sharded") / "sweep"
+        self.notebook_dir = tmp_path_factory.mktemp("notebook")
+        self.proc = self.thread = None
+        self.notebook = self.notebook_error = None
+        if "test_sharded_sweep_equals_single_device" in names:
+            # The same sweep on 4 (virtual CPU) devices, in a fresh process.
+            env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4",
+                       JAX_PLATFORMS="cpu")
+            self.proc = subprocess.Popen(
+                [sys.executable, "-c", SHARDED_SCRIPT, str(self.sharded_out)], cwd=REPO,
+                env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+            )
+        if "test_parameter_sweep_notebook" in names:
+            self.thread = threading.Thread(target=self._run_notebook, daemon=True)
+            self.thread.start()
+
+    def _run_notebook(self):
+        try:
+            self.notebook = run_notebook("parameter_sweep.ipynb", self.notebook_dir)
+        except BaseException as err:  # re-raised in the test
+            self.notebook_error = err
+
+
+@pytest.fixture(scope="module", autouse=True)
+def background(request, tmp_path_factory):
+    names = {item.name for item in request.session.items}
+    work = _Background(tmp_path_factory, names)
+    yield work
+    if work.proc is not None and work.proc.poll() is None:
+        work.proc.kill()
+        work.proc.wait()
+    if work.thread is not None:
+        work.thread.join(timeout=600)
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """An uninterrupted single-device sweep: its directory and rows."""
+    out = tmp_path_factory.mktemp("reference") / "sweep"
+    result = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    assert result.complete and result.computed_chunks == 3 and result.skipped_chunks == 0
+    return out, sj.load_sweep(out)
+
+
+def _direct(wheel_leaves, snow_leaves, load, slip):
+    """`solve_wheel` on flat inputs, in blocks of C (the last one padded, then cut)."""
+    n = load.size
+    pad = lambda x: np.pad(np.broadcast_to(x, (n,))[a:b], (0, C - (b - a)), mode="edge")  # noqa: E731
+    parts = []
+    for a in range(0, n, C):
+        b = min(a + C, n)
+        st = sj.solve_wheel(
+            sj.RigidWheel(**{k: pad(v) for k, v in wheel_leaves.items()}),
+            sj.WongSnow(**{k: pad(v) for k, v in snow_leaves.items()}),
+            pad(load), pad(slip),
+        )
+        parts.append({f: np.asarray(getattr(st, f))[: b - a] for f in (*OUTPUTS, "status")})
+    return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
+
+
+def _assert_rows_equal(got, want):
+    assert list(got) == list(want)
+    for name in want:
+        np.testing.assert_array_equal(got[name], want[name], err_msg=name)
+        assert got[name].dtype == want[name].dtype, name
+
+
+def test_grid_sweep_equals_solve_wheel(reference):
+    out, rows = reference
+    # The grid (parameter set, load, slip), slip fastest, built here independently.
+    p, l, s = (g.reshape(-1) for g in np.meshgrid(np.arange(2), np.arange(2), np.arange(5),
+                                                  indexing="ij"))
+    np.testing.assert_array_equal(rows["index"], np.arange(N))
+    np.testing.assert_array_equal(rows["param_set"], p)
+    np.testing.assert_array_equal(rows["load"], LOADS[l])
+    np.testing.assert_array_equal(rows["slip"], SLIPS[s])
+    np.testing.assert_array_equal(rows["p_w"], P_W[p])
+    np.testing.assert_array_equal(rows["cohesion"], np.asarray(SNOW.cohesion)[p])
+    assert "z_w" not in rows and "diameter" not in rows  # constant leaves are not columns
+    want = _direct(
+        {"diameter": WHEEL.diameter, "width": WHEEL.width},
+        {"p_w": P_W[p], "z_w": SNOW.z_w, "cohesion": np.asarray(SNOW.cohesion)[p],
+         "tan_phi": SNOW.tan_phi, "shear_modulus": SNOW.shear_modulus},
+        LOADS[l], SLIPS[s],
+    )
+    for name in OUTPUTS:
+        np.testing.assert_allclose(rows[name], want[name], rtol=1e-12, atol=0, err_msg=name)
+    np.testing.assert_array_equal(rows["status"], want["status"])
+    assert np.all(rows["status"] == sj.Status.CONVERGED)
+    # The CSV holds the same rows, losslessly (%.17g), and the chunks agree with sweep.npz.
+    table = np.loadtxt(out / "sweep.csv", delimiter=",", skiprows=1)
+    header = (out / "sweep.csv").read_text().splitlines()[0].split(",")
+    assert header == list(rows)
+    for j, name in enumerate(header):
+        np.testing.assert_array_equal(table[:, j], rows[name].astype(float), err_msg=name)
+    chunks = list(sj.iter_sweep_chunks(out))
+    assert [c["index"].size for c in chunks] == [8, 8, 4]
+    _assert_rows_equal({k: np.concatenate([c[k] for c in chunks]) for k in rows}, rows)
+
+
+def test_list_sweep_equals_solve_wheel(tmp_path):
+    rng = np.random.default_rng(3)
+    n = 11
+    loads = rng.uniform(2000.0, 7000.0, n)
+    slips = rng.uniform(-0.3, 0.9, n)
+    p_w = rng.uniform(50e3, 120e3, n)
+    np.save(tmp_path / "loads.npy", loads)
+    loads_mm = np.load(tmp_path / "loads.npy", mmap_mode="r")  # inputs are read by slices
+    snow = sj.WongSnow(p_w, 0.2, 15e3, 0.0787, 0.01)
+    r = sj.sweep(WHEEL, snow, loads_mm, slips, grid=False, out=tmp_path / "s", chunk_size=C,
+                 progress=False, formats=("npz",))
+    assert r.n_points == n and r.n_chunks == 2 and r.files == {"npz": tmp_path / "s/sweep.npz"}
+    rows = sj.load_sweep(tmp_path / "s")
+    assert list(rows) == ["index", "load", "slip", "p_w", *OUTPUTS, "status"]
+    np.testing.assert_array_equal(rows["load"], loads)
+    want = _direct({"diameter": WHEEL.diameter, "width": WHEEL.width},
+                   {"p_w": p_w, "z_w": 0.2, "cohesion": 15e3, "tan_phi": 0.0787,
+                    "shear_modulus": 0.01}, loads, slips)
+    for name in OUTPUTS:
+        np.testing.assert_allclose(rows[name], want[name], rtol=1e-12, atol=0, err_msg=name)
+    np.testing.assert_array_equal(rows["status"], want["status"])
+    assert not (tmp_path / "s/sweep.csv").exists()
+
+
+def test_interrupted_sweep_resumes_row_for_row(reference, tmp_path):
+    ref_out, ref_rows = reference
+    out = tmp_path / "s"
+
+    def stop_after_first(k, path):
+        assert path.exists()
+        raise KeyboardInterrupt
+
+    with pytest.raises(KeyboardInterrupt):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
+                 callback=stop_after_first)
+    assert sorted(p.name for p in out.iterdir()) == ["chunk_000000.npz", "manifest.json"]
+    with pytest.raises(ValueError, match="not finished"):
+        sj.load_sweep(out)
+    seen = []
+    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
+                 callback=lambda k, path: seen.append(k))
+    assert seen == [1, 2] and r.computed_chunks == 2 and r.skipped_chunks == 1 and r.complete
+    _assert_rows_equal(sj.load_sweep(out), ref_rows)
+    for name in ("sweep.csv", "sweep.npz", "chunk_000000.npz", "chunk_000002.npz"):
+        assert (out / name).read_bytes() == (ref_out / name).read_bytes(), name
+    # A finished sweep run again computes nothing and rewrites nothing.
+    mtime = (out / "sweep.csv").stat().st_mtime_ns
+    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    assert r.computed_chunks == 0 and r.complete
+    assert (out / "sweep.csv").stat().st_mtime_ns == mtime
+
+
+def test_damaged_files_are_detected_and_recomputed(reference, tmp_path):
+    ref_out, ref_rows = reference
+    out = tmp_path / "s"
+    shutil.copytree(ref_out, out)
+    chunk = out / "chunk_000001.npz"
+    chunk.write_bytes(chunk.read_bytes()[:1000])  # truncated by a crash mid-write
+    stray = out / ".chunk_000002.npz.tmp.p0.12345"  # left by a killed process
+    stray.write_bytes(b"partial")
+    (out / "sweep.npz").write_bytes((out / "sweep.npz").read_bytes()[:-10])
+    (out / "sweep.csv").unlink()
+    with pytest.warns(UserWarning, match="chunk_000001.npz"):
+        r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    assert r.computed_chunks == 1 and r.skipped_chunks == 2 and r.complete
+    assert not stray.exists()
+    _assert_rows_equal(sj.load_sweep(out), ref_rows)
+    for name in ("sweep.csv", "sweep.npz", "chunk_000001.npz"):
+        assert (out / name).read_bytes() == (ref_out / name).read_bytes(), name
+    # A chunk with the wrong rows (e.g. from another sweep) is rejected too.
+    np.savez(out / "chunk_000002.npz", **{k: v[:4] for k, v in ref_rows.items()})
+    assert not _sweep._chunk_ok(out / "chunk_000002.npz", _definition(), 2)
+    assert _sweep._chunk_ok(out / "chunk_000000.npz", _definition(), 0)
+
+
+def _definition(**kw):
+    args = dict(grid=True, shear="classic", chunk_size=C, nodes_per_panel=None, max_steps=64)
+    args.update(kw)
+    return _sweep._define(WHEEL, SNOW, LOADS, SLIPS, **args)
+
+
+def test_a_different_sweep_is_refused(reference, tmp_path):
+    out = tmp_path / "s"
+    shutil.copytree(reference[0], out)
+    with pytest.raises(ValueError, match="chunk_size: 8 on disk, 4 now"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=4, progress=False)
+    with pytest.raises(ValueError, match="shear: 'classic' on disk, 'none' now"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, shear="none")
+    with pytest.raises(ValueError, match="input values"):
+        sj.sweep(WHEEL, SNOW, LOADS + 1.0, SLIPS, out=out, chunk_size=C, progress=False)
+    (out / "manifest.json").unlink()
+    with pytest.raises(ValueError, match="no manifest.json"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    # resume=False starts over, deleting the sweep's files and nothing else.
+    (out / "notes.txt").write_text("mine")
+    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
+                 resume=False, formats=("npz",))
+    assert r.computed_chunks == 3 and r.complete
+    assert sorted(p.name for p in out.iterdir()) == [
+        "chunk_000000.npz", "chunk_000001.npz", "chunk_000002.npz", "manifest.json",
+        "notes.txt", "sweep.npz"]
+    _assert_rows_equal(sj.load_sweep(out), reference[1])
+    # The definition hash covers every input and option, and only those.
+    base = _definition().digest()
+    assert _definition().digest() == base
+    for kw in (dict(chunk_size=4), dict(shear="none"), dict(max_steps=32),
+               dict(nodes_per_panel=12), dict(grid=False)):
+        try:
+            other = _definition(**kw).digest()
+        except ValueError:  # grid=False: these inputs cannot be zipped
+            continue
+        assert other != base, kw
+
+
+def test_chunks_are_dealt_to_processes(reference, tmp_path):
+    for n_chunks, count in ((10, 3), (7, 1), (5, 8)):
+        owners = [_sweep._owner(k, count) for k in range(n_chunks)]
+        for index in range(count):
+            mine = [k for k in range(n_chunks) if owners[k] == index]
+            assert mine == list(range(index, n_chunks, count))
+    # Two "processes" sharing a directory: each writes only its chunks; the one that
+    # finds every chunk on disk writes the outputs.
+    out = tmp_path / "s"
+    written = {0: [], 1: []}
+    r0 = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
+                  process_index=0, process_count=2, callback=lambda k, p: written[0].append(k))
+    assert written[0] == [0, 2] and not r0.complete and r0.files == {}
+    assert not (out / "chunk_000001.npz").exists() and not (out / "sweep.csv").exists()
+    r1 = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
+                  process_index=1, process_count=2, callback=lambda k, p: written[1].append(k))
+    assert written[1] == [1] and r1.complete and set(r1.files) == {"npz", "csv"}
+    _assert_rows_equal(sj.load_sweep(out), reference[1])
+
+
+def test_bad_inputs_raise_clear_errors(tmp_path):
+    out = tmp_path / "s"
+    cases = [
+        (dict(loads=np.array([3000.0, -1.0])), "loads must be finite and > 0 N; got -1.0 at index 1"),
+        (dict(slips=np.array([0.1, 1.5])), "slips must be finite and in \\[-1, 1\\]"),
+        (dict(snow=sj.WongSnow(85e3, 0.2, 15e3, -0.1, 0.01)), "tan_phi must be finite and >= 0"),
+        (dict(snow=sj.WongSnow(np.array([60e3, 80e3]), np.array([0.1, 0.2, 0.3]), 1e4, 0.1, 0.01)),
+         "same length"),
+        (dict(loads=np.ones((2, 2))), "loads must be a scalar or 1-D"),
+        (dict(grid=False), "same length"),
+        (dict(chunk_size=0), "chunk_size must be a positive integer"),
+        (dict(formats=("parquet",)), "formats must be among"),
+        (dict(shear="wet"), "shear must be one of"),
+    ]
+    for change, message in cases:
+        kw = dict(wheel=WHEEL, snow=SNOW, loads=LOADS, slips=SLIPS, out=out, chunk_size=C)
+        kw.update(change)
+        with pytest.raises(ValueError, match=message):
+            sj.sweep(**kw)
+    with pytest.raises(TypeError, match="RigidWheel"):
+        sj.sweep(SNOW, SNOW, LOADS, SLIPS, out=out)
+    with pytest.raises(ValueError, match="process_index"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, process_index=2, process_count=2)
+    (tmp_path / "file").write_text("")
+    with pytest.raises(ValueError, match="not a directory"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "file", chunk_size=C)
+    assert not out.exists()  # nothing written for a bad definition
+
+
+def test_sharded_sweep_equals_single_device(background, reference):
+    proc, out = background.proc, background.sharded_out
+    log, _ = proc.communicate(timeout=300)
+    assert proc.returncode == 0, log
+    rows = sj.load_sweep(out)
+    ref = reference[1]
+    assert list(rows) == list(ref)
+    for name in ref:
+        if name in OUTPUTS:
+            np.testing.assert_allclose(rows[name], ref[name], rtol=1e-12, atol=0, err_msg=name)
+        else:
+            np.testing.assert_array_equal(rows[name], ref[name], err_msg=name)
+
+
+def test_cli_sweep_resumes_and_reports_bad_specs(reference, tmp_path, capsys):
+    out = tmp_path / "cli"
+    argv = ["sweep", "--loads", "3000,6000", "--slips", "0:0.8:5", "--p-w", "60e3,85.55e3",
+            "--chunk-size", "8", "--out", str(out), "--no-progress"]
+    assert main(argv) == 0
+    assert "20 points in 3 chunk(s) of 8 (3 computed, 0 already" in capsys.readouterr().out
+    # The thesis preset with two p_w values (cohesion = 0.2165 p_w): the reference sweep.
+    _assert_rows_equal(sj.load_sweep(out), reference[1])
+    assert (out / "sweep.csv").read_bytes() == (reference[0] / "sweep.csv").read_bytes()
+    assert main(argv) == 0  # the same command again: nothing left to compute
+    assert "(0 computed, 3 already" in capsys.readouterr().out
+    # --param-grid: the p_w and cohesion lists combine into 4 parameter sets.
+    grid_argv = argv[:-3] + ["--cohesion", "12990,18521", "--param-grid", "--format", "none",
+                             "--out", str(tmp_path / "grid"), "--no-progress"]
+    assert main(grid_argv) == 0
+    rows = sj.load_sweep(tmp_path / "grid")
+    assert rows["index"].size == 40 and not (tmp_path / "grid/sweep.csv").exists()
+    assert list(zip(rows["p_w"][::10], rows["cohesion"][::10])) == [
+        (60e3, 12990.0), (60e3, 18521.0), (85.55e3, 12990.0), (85.55e3, 18521.0)]
+    capsys.readouterr()
+    for bad, message in [
+        (["--loads", "1:2"], "--loads '1:2': expected start:stop:num"),
+        (["--slips", "0:1:x"], "--slips '0:1:x'"),
+        (["--loads", "-5"], "loads must be finite and > 0 N"),
+        (["--chunk-size", "4"], "chunk_size: 8 on disk, 4 now"),
+        (["--format", "parquet"], "--format 'parquet'"),
+        (["--z-w", "0.1,0.2,0.3"], "--p-w has 2, --z-w has 3"),
+    ]:
+        args = argv + bad
+        assert main(args) == 2, bad
+        err = capsys.readouterr().err
+        assert err.startswith("snowjax sweep: error:") and message in err, err
+        assert "Traceback" not in err
+
+
+def test_parameter_sweep_notebook(background):
+    """Runs `notebooks/parameter_sweep.ipynb` (small sizes), started in the background."""
+    background.thread.join(timeout=600)
+    assert not background.thread.is_alive(), "the notebook did not finish in 600 s"
+    if background.notebook_error is not None:
+        raise background.notebook_error
+    text = outputs_text(background.notebook)
+    assert "computed_chunks=0" in text  # the rerun resumed instead of recomputing
+    counts = dict(re.findall(r"^(\w+): (\d+) points$", text, flags=re.M))
+    assert int(counts["CONVERGED"]) > 0 and sum(map(int, counts.values())) == 48, counts
+    assert (background.notebook_dir / "sweep-output" / "sweep.csv").exists()
