@@ -75,11 +75,34 @@ from ._empirical import van_es_compaction_resistance as van_es_compaction_resist
 from ._empirical import van_es_rolling_resistance as van_es_rolling_resistance
 
 # --- calibration (issue 5): snowjax/_fit.py ---
+from ._fit import FitResult as FitResult
+from ._fit import fit_plate_sinkage as fit_plate_sinkage
+from ._fit import fit_tire_coefficients as fit_tire_coefficients
+from ._fit import fit_wheel as fit_wheel
+from ._fit import thesis_plate_test as thesis_plate_test
+from ._fit import thesis_tire_table as thesis_tire_table
 
 # --- vehicle simulation (issue 7): snowjax/_sim.py ---
 
 # --- sweeps (issue 8): snowjax/_sweep.py ---
+from ._sweep import SweepResult as SweepResult
+from ._sweep import iter_sweep_chunks as iter_sweep_chunks
+from ._sweep import load_sweep as load_sweep
+from ._sweep import sweep as sweep
 
 # --- reproduction of the thesis (issue 6): snowjax/_reproduce.py, _derivatives.py ---
+from ._reproduce import reproduce as reproduce
+from ._derivatives import DimensionlessConstants as DimensionlessConstants
+from ._derivatives import ShearDerivatives as ShearDerivatives
+from ._derivatives import shear_derivatives as shear_derivatives
+from ._derivatives import classic_normalized_shear as classic_normalized_shear
+from ._derivatives import simplified_normalized_shear as simplified_normalized_shear
+from ._derivatives import max_normalized_pressure as max_normalized_pressure
+from ._derivatives import contact_angle_at_pressure as contact_angle_at_pressure
+from ._derivatives import thesis_table_4_3 as thesis_table_4_3
+from ._derivatives import thesis_table_4_4 as thesis_table_4_4
+from ._derivatives import thesis_table_4_5 as thesis_table_4_5
+from ._derivatives import thesis_table_4_6 as thesis_table_4_6
+from ._derivatives import thesis_appendix_dz_dsigma as thesis_appendix_dz_dsigma
 
 __version__ = "0.1.0"

@@ -101,7 +101,7 @@ class WongSnow(eqx.Module):
         **Arguments:**
 
         - `diameter`: wheel diameter D the ratios refer to [m] (default 0.736 m).
-        - `p_w`: Wong's pressure parameter [Pa] (default 12.92 kPa).
+        - `p_w`: Wong's pressure parameter [Pa] (default 85.55 kPa, `THESIS_P_W`).
         """
         return cls(
             p_w=p_w,

@@ -27,14 +27,15 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ._fit import thesis_tire_table
+
 __all__ = ["FigureSpec", "FIGURES", "reproduce", "TABLE_3_2"]
 
-# Table 3.2 of the thesis (FEA data): F_z [kN]: C_s [kN/rad], C_alpha [kN/rad], mu_x, mu_y, E1.
+# Table 3.2 of the thesis (FEA data, shipped as snowjax/data/table_3_2.csv):
+# F_z [kN] -> (C_s [kN/rad], C_alpha [kN/rad], mu_x, mu_y, E1).
 TABLE_3_2 = {
-    3.5: (4.9236, 5.85986746, 0.39290586, 0.22346521, 0.04024988),
-    4.5: (4.9778, 6.10045272, 0.35743519, 0.18417462, 0.08024988),
-    6.24: (5.0888, 6.34103797, 0.29058663, 0.13833560, 0.18907413),
-    7.5: (5.9020, 7.17498769, 0.24965893, 0.11632469, 0.34697080),
+    float(f): (cs, ca, mux, muy, e1)
+    for f, cs, ca, mux, muy, e1 in zip(*thesis_tire_table().values())
 }
 # The thesis's published Bekker fit of the plate test (section 2.1.1), SI.
 THESIS_BEKKER_FIT = dict(k_c=3.43e3, k_phi=218.84215e3, n=1.0707148)

@@ -234,7 +234,11 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     dtype = load.dtype
     tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
-    theta_base = jnp.arccos(jnp.clip(1 - 2 * snow.z_w / diameter, -1.0, 1.0))
+    # arccos(1 - 2 z_w / D), pi when the layer is deeper than the wheel; `where` keeps the
+    # gradient finite there (arccos' is infinite at -1).
+    cos_base = 1 - 2 * snow.z_w / diameter
+    inside = cos_base > -1
+    theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
     theta_cap = jnp.minimum(theta_base, MAX_ENTRY_ANGLE)
     reaches_base = theta_base <= MAX_ENTRY_ANGLE
     n_nodes = n[braking]
