@@ -43,9 +43,9 @@ SHEAR_MODELS = ("classic", "simplified", "none")
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
 # four-panel rule otherwise), chosen so that every contact integral stays within 1e-7 of
 # adaptive quadrature over the documented range (tests; measured worst cases: classic
-# 3e-9 / 7e-9, simplified 3e-9 driving, none 4e-10).  The simplified model's cubic
+# 4e-8 / 7e-9, simplified 3e-9 driving, none 4e-10).  The simplified model's cubic
 # exponent makes its shear layer steeper, hence more nodes.
-DEFAULT_NODES_PER_PANEL = {"classic": (12, 10), "simplified": (24, 16), "none": (8, 8)}
+DEFAULT_NODES_PER_PANEL = {"classic": (10, 10), "simplified": (24, 16), "none": (8, 8)}
 
 
 def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, int]:

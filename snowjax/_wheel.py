@@ -167,7 +167,7 @@ def _valid_mask(wheel, snow, load, slip, shear):
 def _tolerance(dtype) -> float:
     # Newton stops once |ln(W / F_z)| < tol at the iterate before its last step, so the
     # returned root is balanced far below tol (typically 1e-15 in float64).
-    return 1e-10 if dtype == jnp.float64 else 2e-5
+    return 1e-9 if dtype == jnp.float64 else 2e-5
 
 
 S_MIN = 1e-6  # lower bound of the solver variable s (theta0 = theta_cap exp(-s^2))
@@ -280,6 +280,16 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
 
     if guess is None:
         s0 = _initial_guess(theta_cap, target, diameter, width, snow)
+        if shear != "none":
+            # The shear stress's share of W: one quadrature at the no-shear guess gives the
+            # factor W / W_no_shear, and the closed form is re-solved for load / factor.
+            # Cuts the guess's error from ~4 % to ~0.3 %, one Newton step fewer.
+            theta_g = _theta_from_s(s0, theta_cap)
+            z0_g = jnp.maximum(1 - max_sinkage(theta_g, diameter) / snow.z_w, 0.0)
+            w_ns = diameter / 2 * width * _sigma_cos_integral(theta_g, z0_g, a, snow.p_w)
+            factor = jnp.clip(vertical_load(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
+            factor = jax.lax.stop_gradient(factor)
+            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow)
     else:
         s0 = _warm_start(guess, theta_cap)
     newton = optx.root_find(
@@ -307,7 +317,7 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
         )
     theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
     w, r, t, m = all_forces(theta0, over & reaches_base)
-    balanced = jnp.abs(w / target - 1) <= 100 * tol
+    balanced = jnp.abs(w / target - 1) <= 10 * tol  # 1e-8 in float64
     status = jnp.where(
         over,
         jnp.where(reaches_base, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT),
@@ -457,7 +467,7 @@ def solve_wheel(
     - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  A batch without
       braking (all slips >= 0) uses two panels, one with braking four (split at the
       sign change of the shear stress); defaults (two-panel, four-panel): classic
-      (12, 10), simplified (24, 16), none (8, -).  With the defaults every contact
+      (10, 10), simplified (24, 16), none (8, -).  With the defaults every contact
       integral is within 1e-7 (relative) of adaptive quadrature over the documented
       range, except the braking extension of the simplified model (not defined by the
       thesis), within 1e-4.  An integer sets both.
