@@ -83,6 +83,13 @@ from ._fit import thesis_plate_test as thesis_plate_test
 from ._fit import thesis_tire_table as thesis_tire_table
 
 # --- vehicle simulation (issue 7): snowjax/_sim.py ---
+from ._sim import TorqueProfile as TorqueProfile
+from ._sim import Trajectory as Trajectory
+from ._sim import Vehicle as Vehicle
+from ._sim import WheelForces as WheelForces
+from ._sim import simulate_longitudinal as simulate_longitudinal
+from ._sim import wheel_forces as wheel_forces
+from ._sim import wheel_kinematics as wheel_kinematics
 
 # --- sweeps (issue 8): snowjax/_sweep.py ---
 from ._sweep import SweepResult as SweepResult

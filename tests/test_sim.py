@@ -1,0 +1,291 @@
+"""Longitudinal vehicle simulation on snow (issue 7): `snowjax.simulate_longitudinal`,
+the force function `snowjax.wheel_forces` and the start-from-rest regularisation.
+
+Every simulation here is one compiled program, `_run`: a 2-wheel vehicle, 80 implicit
+steps of 0.05 s, the thesis tyre and snow with p_w and tan(phi) traced, and a 3-knot
+`TorqueProfile`; it returns the trajectory and the forward-mode (`diffrax.ForwardMode`)
+derivatives of the final speed w.r.t. (p_w, tan phi, the three knot torques).  The
+scenarios differ only in array values, so they share that compile.
+"""
+
+import diffrax
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+import scipy.optimize
+
+import snowjax as sj
+from snowjax import Status
+
+from .notebook_runner import outputs_text, run_notebook
+
+WHEEL = sj.RigidWheel.thesis_tire()
+SNOW = sj.WongSnow.thesis_fresh_snow()
+LOAD = 3500.0  # [N] per wheel: the thesis's lightest FEA load
+VEHICLE = sj.Vehicle(
+    mass=2 * LOAD / 9.80665, wheel_inertia=1.5, wheel=WHEEL, num_wheels=2
+)
+T1, DT = 4.0, 0.05
+KNOT_TIMES = jnp.linspace(0.0, T1, 3)
+EPS = 0.05  # default speed_eps [m/s]
+
+
+def _parameters(snow, knots):
+    """Vector x = (p_w, tan phi, 3 knot torques) of the shared program."""
+    return jnp.concatenate(
+        [jnp.array([snow.p_w, snow.tan_phi], float), jnp.asarray(knots, float)]
+    )
+
+
+def _simulate(x, v0):
+    snow = sj.WongSnow(x[0], SNOW.z_w, SNOW.cohesion, x[1], SNOW.shear_modulus)
+    torque = sj.TorqueProfile(KNOT_TIMES, x[2:])
+    return sj.simulate_longitudinal(
+        VEHICLE, snow, torque, T1, DT, initial_speed=v0, adjoint=diffrax.ForwardMode()
+    )
+
+
+@jax.jit
+def _run(x, v0):
+    """(trajectory, d speed(T1) / dx), from one forward-mode linearisation."""
+
+    def final_speed(x):
+        traj = _simulate(x, v0)
+        return traj.speed[-1], traj
+
+    _, tangent, traj = jax.linearize(final_speed, x, has_aux=True)
+    return traj, jax.vmap(tangent)(jnp.eye(x.shape[0]))
+
+
+def _self_propelled_slip(load):
+    """Slip i* with zero drawbar pull and its torque M_w(i*), by brentq on solve_wheel."""
+    dp = lambda i: float(sj.solve_wheel(WHEEL, SNOW, load, i).drawbar_pull)  # noqa: E731
+    slip = scipy.optimize.brentq(dp, -0.5, 0.5, xtol=1e-14)
+    return slip, float(sj.solve_wheel(WHEEL, SNOW, load, slip).torque)
+
+
+# ----------------------------------------------------------------------------------------
+# Steady state
+# ----------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def steady():
+    slip, torque = _self_propelled_slip(LOAD)
+    traj, _ = _run(_parameters(SNOW, [torque] * 3), 1.0)
+    return slip, torque, traj
+
+
+def test_constant_torque_reaches_the_self_propelled_steady_state(steady):
+    slip_star, torque, traj = steady
+    assert traj.result == diffrax.RESULTS.successful
+    assert np.all(np.asarray(traj.status) == Status.CONVERGED)
+    # Drawbar pull -> 0 and slip constant at the end (the last second).
+    late = slice(-20, None)
+    dp_scale = float(sj.solve_wheel(WHEEL, SNOW, LOAD, 0.0).motion_resistance)
+    assert np.max(np.abs(traj.drawbar_pull[late])) < 1e-6 * dp_scale
+    assert np.ptp(np.asarray(traj.slip[late])) < 1e-9
+    assert np.ptp(np.asarray(traj.speed[late])) < 1e-8
+    # ... at the slip brentq finds independently, with the kinematics of eq. (2.6).
+    np.testing.assert_allclose(traj.slip[-1], slip_star, atol=1e-8)
+    kinematic = 1 - traj.speed[-1] / (traj.wheel_speed[-1] * WHEEL.diameter / 2)
+    np.testing.assert_allclose(traj.slip[-1], kinematic, rtol=1e-12)
+    # Above the regularisation band: the steady state is the model's own.
+    assert float(traj.speed[-1]) > 2 * EPS
+    # Independent check: solve_wheel at the simulated final slip.
+    st = sj.solve_wheel(WHEEL, SNOW, LOAD, float(traj.slip[-1, 0]))
+    assert abs(float(st.drawbar_pull)) < 1e-6 * dp_scale
+    np.testing.assert_allclose(float(st.torque), torque, rtol=1e-9)
+    np.testing.assert_allclose(traj.sinkage[-1], float(st.sinkage), rtol=1e-9)
+
+
+def test_transient_obeys_newtons_law(steady):
+    """m dv/dt = sum of drawbar pulls (implicit Euler: forces at the step's end)."""
+    _, _, traj = steady
+    dv = np.diff(np.asarray(traj.speed)) / DT
+    force = np.sum(np.asarray(traj.drawbar_pull), axis=1)[1:] / float(VEHICLE.mass)
+    np.testing.assert_allclose(dv, force, rtol=1e-6, atol=1e-7)
+    np.testing.assert_allclose(np.diff(traj.distance) / DT, traj.speed[1:], rtol=1e-7)
+
+
+# ----------------------------------------------------------------------------------------
+# Start from rest, gradients
+# ----------------------------------------------------------------------------------------
+
+X_REST = _parameters(SNOW, [545.0, 520.0, 535.0])
+
+
+@pytest.fixture(scope="module")
+def from_rest():
+    return _run(X_REST, 0.0)
+
+
+def test_start_from_rest_is_finite_and_physical(from_rest):
+    traj, jac = from_rest
+    assert traj.result == diffrax.RESULTS.successful
+    for name in ("speed", "distance", "wheel_speed", "slip", "sinkage", "drawbar_pull",
+                 "resisting_torque", "entry_angle"):
+        assert np.all(np.isfinite(getattr(traj, name))), name
+    assert np.all(np.isfinite(jac)) and np.all(jac != 0)
+    assert np.all(np.asarray(traj.status) == Status.CONVERGED)
+    assert float(traj.speed[0]) == 0.0 and float(traj.drawbar_pull[0, 0]) == 0.0
+    # Driving slip throughout: the rim runs ahead of the vehicle, which accelerates.
+    assert np.all(np.asarray(traj.slip[1:]) > 0.02)
+    assert np.all(np.diff(np.asarray(traj.speed)) > 0)
+    assert float(traj.speed[-1]) > 1.0
+
+
+@pytest.mark.parametrize(
+    "index, rel_step",
+    [(0, 1e-4), (1, 1e-3), (2, 1e-5), (3, 1e-5), (4, 1e-5)],
+    ids=["p_w", "tan_phi", "knot0", "knot1", "knot2"],
+)
+def test_gradient_of_final_speed_matches_central_differences(from_rest, index, rel_step):
+    _, jac = from_rest
+    h = rel_step * float(X_REST[index])
+    up, _ = _run(X_REST.at[index].add(h), 0.0)
+    down, _ = _run(X_REST.at[index].add(-h), 0.0)
+    fd = (float(up.speed[-1]) - float(down.speed[-1])) / (2 * h)
+    assert abs(fd) > 1e-6  # a sensitivity worth testing
+    np.testing.assert_allclose(float(jac[index]), fd, rtol=1e-2)
+
+
+# ----------------------------------------------------------------------------------------
+# Regularisation at rest
+# ----------------------------------------------------------------------------------------
+
+
+def test_wheel_kinematics_regularisation():
+    r = 0.5
+    v = np.array([0.0, 0.0, 1.0, 1.5, 3.0, -1.5, 0.01, 0.0, 1e-3, 0.03])
+    w = np.array([0.0, 2.0, 0.0, 4.0, 4.0, -4.0, 0.02, 0.06, 0.0, -0.06]) / r
+    slip, factor = sj.wheel_kinematics(v, w, r, EPS)
+    expected_slip = [
+        0.0,  # at rest
+        1.0,  # spinning in place
+        -1.0,  # locked wheel
+        1 - 1.5 / 4.0,  # driving, eq. (2.6)
+        1 - 3.0 / 4.0,  # braking with v <= 2 omega r, eq. (2.6)
+        1 - 1.5 / 4.0,  # the mirror image of the driving case
+        0.5,  # inside the band: still the ratio
+        1.0,
+        -1.0,
+        1.0,  # counter-rotating, mirrored: (+0.06 rim, 0 speed) spins in place
+    ]
+    np.testing.assert_allclose(slip, expected_slip, atol=1e-15)
+    s = np.abs(v + w * r) / (2 * EPS)
+    np.testing.assert_allclose(factor, 1 - (1 - np.minimum(s, 1)) ** 2, atol=1e-15)
+    assert factor[0] == 0 and factor[3] == 1 and factor[5] == 1
+    # C^1 at the band edge and linear growth from rest.
+    d = jax.grad(lambda u: sj.wheel_kinematics(u, u / r, r, EPS)[1])
+    assert float(d(jnp.asarray(2 * EPS / 2 - 1e-9))) == pytest.approx(0.0, abs=1e-6)
+    assert float(d(jnp.asarray(0.0))) == pytest.approx(2 / EPS)
+
+
+@pytest.fixture(scope="module")
+def forces_at_states():
+    """wheel_forces on a batch of states, and solve_wheel at the same slips."""
+    r = float(WHEEL.diameter) / 2
+    v = jnp.array([0.0, 2.0, 3.0, -2.0, 0.01, 0.0, 1.0])
+    w = jnp.array([0.0, 2.5, 2.0, -2.5, 0.03, 0.08, 0.0]) / r
+    f = sj.wheel_forces(v, w, LOAD, WHEEL, SNOW)
+    st = sj.solve_wheel(WHEEL, SNOW, LOAD, f.slip)
+    return v, w, f, st
+
+
+def test_wheel_forces_are_the_regularised_equilibrium(forces_at_states):
+    v, w, f, st = forces_at_states
+    slip, factor = sj.wheel_kinematics(v, w, WHEEL.diameter / 2, EPS)
+    sign = np.where(v + w * WHEEL.diameter / 2 >= 0, 1.0, -1.0)
+    np.testing.assert_allclose(f.slip, slip)
+    np.testing.assert_allclose(f.longitudinal_force, sign * factor * st.drawbar_pull, rtol=1e-12)
+    np.testing.assert_allclose(f.resisting_torque, sign * factor * st.torque, rtol=1e-12)
+    np.testing.assert_allclose(f.sinkage, st.sinkage, rtol=1e-12)
+    # At rest: no force.  Above the band: exactly the thesis model at slip 1 - v/(omega r).
+    assert float(f.longitudinal_force[0]) == 0.0 and float(f.resisting_torque[0]) == 0.0
+    exact = sj.solve_wheel(WHEEL, SNOW, LOAD, jnp.array([1 - 2.0 / 2.5, 1 - 3.0 / 2.0]))
+    np.testing.assert_allclose(f.longitudinal_force[1:3], exact.drawbar_pull, rtol=1e-12)
+    np.testing.assert_allclose(f.resisting_torque[1:3], exact.torque, rtol=1e-12)
+    # The mirror image travelling backwards.
+    np.testing.assert_allclose(f.longitudinal_force[3], -f.longitudinal_force[1], rtol=1e-12)
+    np.testing.assert_allclose(f.resisting_torque[3], -f.resisting_torque[1], rtol=1e-12)
+    assert np.all(np.asarray(f.status) == Status.CONVERGED)
+
+
+def test_wheel_forces_gradients_at_and_near_rest():
+    """Reverse mode through the force function: finite at rest, equal to differences."""
+
+    def pull(x):
+        return sj.wheel_forces(x[0], x[1], LOAD, WHEEL, SNOW).longitudinal_force
+
+    grad = jax.jit(jax.grad(pull))
+    g0 = grad(jnp.array([0.0, 0.0]))
+    assert np.all(np.isfinite(g0))
+    x = np.array([0.02, 0.04])  # inside the band, driving
+    g = grad(jnp.asarray(x))
+    for k in range(2):
+        h = np.zeros(2)
+        h[k] = 1e-6
+        fd = (float(pull(x + h)) - float(pull(x - h))) / 2e-6
+        np.testing.assert_allclose(float(g[k]), fd, rtol=1e-4)
+
+
+def test_coasting_vehicle_comes_to_rest_and_stays():
+    traj, _ = _run(_parameters(SNOW, [0.0, 0.0, 0.0]), 3.0)
+    assert traj.result == diffrax.RESULTS.successful
+    speed = np.asarray(traj.speed)
+    assert np.all(speed > -1e-6)
+    stop = np.argmax(speed < 1e-6)
+    assert 0 < stop < len(speed) - 10
+    assert np.all(np.abs(speed[stop:]) < 1e-6)
+    assert np.ptp(np.asarray(traj.distance[stop:])) < 1e-6
+    # Unpowered wheels: the snow's torque only decelerates the wheel, I domega/dt = -M_w.
+    inertia = float(VEHICLE.wheel_inertia)
+    np.testing.assert_allclose(
+        -inertia * np.diff(np.asarray(traj.wheel_speed), axis=0) / DT,
+        traj.resisting_torque[1:], rtol=1e-6, atol=1e-4,
+    )
+    assert np.all(np.asarray(traj.slip[1:stop]) < 0)  # braking slip, eq. (2.6)
+
+
+def test_torque_below_the_self_propelled_torque_only_creeps(steady):
+    _, torque, _ = steady
+    traj, _ = _run(_parameters(SNOW, [0.5 * torque] * 3), 0.0)
+    assert traj.result == diffrax.RESULTS.successful
+    assert 0 < float(traj.speed[-1]) < EPS
+
+
+# ----------------------------------------------------------------------------------------
+# Bad input, notebook
+# ----------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(dt=0.0), "dt"),
+        (dict(t1=-1.0), "t1"),
+        (dict(speed_eps=0.0), "speed_eps"),
+        (dict(initial_speed=np.nan), "initial_speed"),
+        (dict(vehicle=sj.Vehicle(-1.0, 1.5, WHEEL, 2)), "mass"),
+        (dict(torque=sj.TorqueProfile([0.0, 1.0], [[1.0, 2.0, 3.0]] * 2)), "TorqueProfile"),
+        (dict(torque=sj.TorqueProfile([1.0, 0.0], [1.0, 2.0])), "increasing"),
+    ],
+)
+def test_bad_input_raises(kwargs, match):
+    args = dict(vehicle=VEHICLE, snow=SNOW, torque=600.0, t1=1.0, dt=0.1)
+    args.update(kwargs)
+    t1, dt = args.pop("t1"), args.pop("dt")
+    with pytest.raises(ValueError, match=match):
+        sj.simulate_longitudinal(args.pop("vehicle"), args.pop("snow"), args.pop("torque"),
+                                 t1, dt, **args)
+    with pytest.raises(ValueError, match="load"):
+        sj.wheel_forces(1.0, 2.0, -5.0, WHEEL, SNOW)
+
+
+def test_notebook_runs(tmp_path):
+    nb = run_notebook("vehicle_simulation.ipynb", tmp_path)
+    text = outputs_text(nb)
+    assert "recovered p_w" in text
+    assert "time to 5 m/s" in text
