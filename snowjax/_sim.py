@@ -15,7 +15,7 @@ is **quasi-static**, so transients faster than the passage of the snow under the
 transfer, tyre deflection.  A wheel whose applied torque is zero rolls freely (undriven).
 
 **Slip.**  The argument of `solve_wheel` is the driving slip of eq. (2.6),
-`i = 1 - v / (omega r)`, computed as `(omega r - v) / max(omega r, v / 2)` and clipped to
+`i = 1 - v / (omega r)`, computed as `(omega r - v) / max(|omega r|, v / 2)`, clipped to
 [-1, 1]: exact for driving (0 <= v <= omega r, i in [0, 1]) and for braking down to
 `v = 2 omega r` (i = -1); harder braking, up to the locked wheel, is held at i = -1, where
 the shear stress of the thesis's snow (K << D) is already mobilised backwards over nearly
@@ -34,20 +34,24 @@ its 0/0 at the origin is guarded.  Consequences, all tested: a vehicle at rest w
 torque stays at rest; a coasting vehicle comes to rest and stays there; a torque below
 the self-propelled torque `M_w(i*)` (i* where the drawbar pull vanishes) leaves the
 vehicle creeping at a speed below `speed_eps` (a viscous contact, the price of the
-regularisation); nothing above `2 speed_eps` depends on `speed_eps`.  The force factor is
-also 0 on the counter-rotation line `v = -omega r` (wheel spinning backwards as fast as
-the vehicle moves forwards), where the mirror switches: the model does not describe
-wheels spinning against the direction of travel, so model brakes as a torque that opposes
-the spin (a controller `torque(t, v, omega)`), not as a constant negative torque.
+regularisation); nothing in states with `(v + omega r) / 2 >= speed_eps` depends on
+`speed_eps`.  The force factor is also 0 on the counter-rotation line `v = -omega r`
+(wheel spinning backwards as fast as the vehicle moves forwards), where the mirror
+switches: the model does not describe wheels spinning against the direction of travel,
+so model brakes as a torque that opposes the spin (a controller `torque(t, v, omega)`);
+a constant negative torque stops the vehicle and then drives it backwards.
 
 **Time stepping** is implicit Euler (first order, L-stable) in `diffrax.diffeqsolve`: the
 wheel-spin equation is stiff (the resisting torque changes with slip on a time scale
-`I omega r / (v dM/di)`, milliseconds near the self-propelled point) and the torque–slip
+`I omega^2 r / (v dM_w/di)`, milliseconds near the self-propelled point) and the torque–slip
 curve is S-shaped in braking.  Each step's implicit equation is solved by a Levenberg–
-Marquardt-damped Newton iteration (an `optimistix` root finder).  **Warm start:** the
-entry angles of the last Newton evaluation are kept in the diffrax *solver state* and
-passed to the next `solve_wheel` as `initial_entry_angle`; they change only the inner
-iteration count, never a converged value, and carry no gradient.
+Marquardt-damped Newton iteration (an `optimistix` root finder) from a quadratic
+extrapolation of the last two steps; a step it cannot solve (in practice only in the
+first steps from rest) is rejected and retried with smaller steps by diffrax's step-size
+controller, whose error test is otherwise switched off, so the steps are `dt`.  **Warm
+start:** the entry angles of the last Newton evaluation are kept in the diffrax *solver
+state* and passed to the next `solve_wheel` as `initial_entry_angle`; they change only
+the inner iteration count, never a converged value, and carry no gradient.
 
 **Gradients** are those of the discrete trajectory (discretise-then-optimise): reverse
 mode through `diffrax.RecursiveCheckpointAdjoint` (default), forward mode (`jax.jvp`,
@@ -72,7 +76,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from ._contact import ShearModel, _check_shear
 from ._params import RigidWheel, WongSnow, _as_float
-from ._wheel import Status, solve_wheel
+from ._wheel import solve_wheel
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -245,7 +249,7 @@ def wheel_forces(
     `entry_angle` in the environment state and pass it back as `initial_entry_angle`.
     The contact forces are quasi-static: the simulator's step should resolve the wheel
     spin dynamics (the wheel equation is stiff near the self-propelled slip; explicit
-    steps need dt well below `I omega r / (v dM_w/di)`, or use an implicit step as
+    steps need dt well below `I omega^2 r / (v dM_w/di)`, or use an implicit step as
     `simulate_longitudinal` does).
 
     **Errors.**  With concrete inputs, non-finite `speed`/`wheel_speed`, `load <= 0` or
@@ -456,15 +460,16 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
     positive and adapts the damping (Nielsen 1999): close to a root it is Newton's method,
     in the S-shaped, kinked regions of the regularised wheel forces near rest it falls
     back to short gradient-like steps instead of cycling.  Converged when
-    `|f_i| <= atol + rtol |y_i|` for all i, or when the accepted step is that small; the
-    result is then the last accepted iterate plus the Newton step computed there (the
-    aux, the entry angles, is that of the accepted iterate).
+    `|f_i| <= atol + rtol |y_i|` for all i (never on small steps alone, which also occur
+    at local minima of |f| that are not roots); the result is then the last accepted
+    iterate plus the Newton step computed there (the aux, the entry angles, is that of
+    the accepted iterate).
     """
 
     rtol: float
     atol: float
     norm: Callable = optx.max_norm
-    initial_damping: float = 1e-4
+    initial_damping: float = 1e-8
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
         def nan_like(s):
@@ -509,9 +514,10 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         damping, growth = damping.astype(y.dtype), growth.astype(y.dtype)
         direction = _lm_direction(jac_acc, f_acc, damping)
         predicted = 0.5 * jnp.sum((f_acc + jac_acc @ direction) ** 2)
+        # Only a small residual counts: small steps alone also happen at a local minimum
+        # of |f| that is not a root (then the step fails and is retried, smaller).
         scale = self.atol + self.rtol * jnp.abs(y_acc)
-        small_step = accept & ~first & (self.norm(state.direction / scale) <= 1.0)
-        converged = accept & ((self.norm(f / scale) <= 1.0) | small_step)
+        converged = accept & (self.norm(f / scale) <= 1.0)
         stuck = first & ~finite
         new_state = _LMState(
             y_acc=y_acc,
@@ -541,11 +547,12 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
 class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
     """Implicit Euler for `_VehicleTerm`, warm-starting the wheel equilibria.
 
-    Solves `y1 = y0 + h f(t1, y1)` for y1 with `_LevenbergMarquardt`, starting from
-    `y0 + (previous increment)`.  The solver state is (entry angles of the last accepted
-    Newton evaluation, previous increment); both carry no gradient.  The "error
-    estimate" is 0 for a solved step and inf for a step whose implicit equation was not
-    solved, so that a step-size controller retries such a step with a smaller one.
+    Solves `y1 = y0 + h f(t1, y1)` for y1 with `_LevenbergMarquardt`, starting from a
+    quadratic extrapolation of the last two increments.  The solver state is (entry
+    angles of the last accepted Newton evaluation, the last two increments, the last
+    step size), none of which carries a gradient.  The "error estimate" is 0 for a
+    solved step and inf for a step whose implicit equation was not solved, so that a
+    step-size controller retries such a step with a smaller one.
     """
 
     term_structure: ClassVar = _VehicleTerm
@@ -559,11 +566,15 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
 
     def init(self, terms, t0, t1, y0, args):
         n = y0.shape[0] - 2
-        return jnp.full((n,), jnp.nan, y0.dtype), jnp.zeros_like(y0)
+        zero = jnp.zeros_like(y0)
+        return jnp.full((n,), jnp.nan, y0.dtype), zero, zero, jnp.asarray(t1 - t0, y0.dtype)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
-        hint, increment = solver_state
+        hint, increment, previous, h_prev = solver_state
         h = t1 - t0
+        # Predictor: quadratic extrapolation of the last two increments (scaled to h).
+        ratio = h / h_prev
+        predictor = y0 + ratio * increment + ratio * (ratio + 1) / 2 * (increment - previous)
 
         def residual(y1, _):
             dydt, entry_angle = terms.vf(t1, y1, hint)
@@ -572,7 +583,7 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
         sol = optx.root_find(
             residual,
             _LevenbergMarquardt(rtol=self.rtol, atol=self.atol),
-            y0 + increment,
+            predictor,
             has_aux=True,
             throw=False,
             max_steps=self.max_steps,
@@ -583,11 +594,12 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
         )
         y1 = sol.value
         hint = jax.lax.stop_gradient(jnp.where(jnp.isfinite(sol.aux), sol.aux, hint))
-        increment = jax.lax.stop_gradient(y1 - y0)
-        increment = jnp.where(jnp.isfinite(increment), increment, 0.0)
+        new_increment = jax.lax.stop_gradient(y1 - y0)
+        new_increment = jnp.where(jnp.isfinite(new_increment), new_increment, 0.0)
+        state = (hint, new_increment, increment * ratio, jax.lax.stop_gradient(h))
         solved = sol.result == optx.RESULTS.successful
         y_error = jnp.where(solved, jnp.zeros_like(y1), jnp.inf)
-        return y1, y_error, dict(y0=y0, y1=y1), (hint, increment), diffrax.RESULTS.successful
+        return y1, y_error, dict(y0=y0, y1=y1), state, diffrax.RESULTS.successful
 
     def func(self, terms, t0, y0, args):
         return terms.vf(t0, y0, None)[0]
@@ -676,12 +688,17 @@ def simulate_longitudinal(
 
     Integrates the equations of motion of the module documentation (vehicle speed,
     distance, every wheel's spin; wheel forces from the quasi-static equilibrium
-    (4.14) via `solve_wheel`) from t = 0 to `t1` with implicit Euler steps of `dt`
-    inside `diffrax.diffeqsolve`.  Gradients w.r.t. every array leaf of `vehicle`,
-    `snow` and `torque` (and the initial state) are exact derivatives of the discrete
-    trajectory: `jax.grad` uses `adjoint` (default
-    `diffrax.RecursiveCheckpointAdjoint()`); for `jax.jvp`/`jax.jacfwd` pass
-    `adjoint=diffrax.ForwardMode()`.
+    (4.14) via `solve_wheel`, slip from eq. 2.6) from t = 0 to `t1` with implicit Euler
+    steps of `dt` inside `diffrax.diffeqsolve`; a step whose implicit equation is not
+    solved (rare: the first steps from rest) is retried as smaller steps by the
+    step-size controller, so the saved times are always the grid `k dt`.  Gradients
+    w.r.t. every array leaf of `vehicle`, `snow` and `torque` (and the initial state)
+    are exact derivatives of the discrete trajectory: `jax.grad` uses `adjoint`
+    (default `diffrax.RecursiveCheckpointAdjoint()`); for `jax.jvp`/`jax.jacfwd` pass
+    `adjoint=diffrax.ForwardMode()`, which compiles and runs much faster for a few
+    parameters.  The entry point is jitted (`eqx.filter_jit`): calls with new array
+    values reuse the compiled program; new shapes, `t1`, `dt`, static options or a new
+    Python callable as `torque` compile anew.
 
     **Arguments:**
 
@@ -706,14 +723,24 @@ def simulate_longitudinal(
 
     **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.
 
-    **Accuracy.**  First order in `dt`.  On the thesis tyre and snow a 0.05 s step is
-    within about 1 % of a converged trajectory in speed; the quasi-static steady state
-    (drawbar pull 0, constant slip) is reproduced exactly, whatever `dt`.
+    **Accuracy.**  First order in `dt`: on the thesis tyre and snow the speed of a
+    0.05 s (0.1 s) step run is within 0.35 % (0.7 %) of a 0.004 s run over 8 s of
+    acceleration; the quasi-static steady state (drawbar pull 0, constant slip) is
+    reproduced exactly whatever `dt`.  Each implicit step is solved to
+    `|residual| <= 1e-9 (1 + |y|)` in float64 (1e-5 relative in float32).
+
+    **Cost.**  About 2–3 Newton iterations per step, each one `solve_wheel` of all
+    wheels (warm-started) plus its forward-mode Jacobian: measured 0.12–0.2 ms per step
+    per wheel (4 wheels, float64, on the project's shared 2-core CPU machine).
 
     **Errors.**  `ValueError` for a non-positive or non-finite `t1`, `dt`, `speed_eps`,
-    `save_every`, mass, wheel inertia or for non-finite initial speeds (with concrete
-    values); a failed implicit step stops the integration with `result` set (no
-    exception) and the remaining rows hold inf states with `Status.INVALID_INPUT`.
+    `save_every`, mass, wheel inertia, a malformed `TorqueProfile` or non-finite initial
+    speeds (with concrete values).  A step that cannot be solved even after the
+    retries stops the integration: `result` is set (no exception) and the remaining rows
+    hold inf states with `Status.INVALID_INPUT`.  Snow or wheel parameters outside
+    `solve_wheel`'s valid range (say tan phi < 0) give NaN forces and a failed
+    `result`; differentiated, they make lineax raise on the non-finite values inside
+    the implicit solves, so optimise positive parameters through their logarithms.
     """
     _check_shear(shear)
     if not isinstance(vehicle, Vehicle):
