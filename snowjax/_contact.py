@@ -500,11 +500,18 @@ def contact_forces(
     """
     _check_shear(shear)
     n = _nodes_for(shear, nodes_per_panel)
+    return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, _layout(slip))
+
+
+def _layout(slip) -> str:
+    """Quadrature layout: "driving" (two panels) if no slip is < 0, else "braking".
+
+    Traced slips (under `jit`, `vmap`, `grad`) get the general "braking" layout, which is
+    valid for every slip, so that only one variant is compiled.
+    """
     if isinstance(slip, jax.core.Tracer):
-        layout = "braking"  # valid for every slip
-    else:
-        layout = "braking" if np.any(np.asarray(slip) < 0) else "driving"
-    return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, layout)
+        return "braking"
+    return "braking" if np.any(np.asarray(slip) < 0) else "driving"
 
 
 def _with_rule_for(slip, shear, fn, layout="auto"):

@@ -32,8 +32,10 @@ from ._contact import (
     _broadcast_leaves,
     _check_shear,
     _contact_scalar,
+    _layout,
     _nodes_for,
     _sigma_cos_integral,
+    _with_rule_for,
     max_sinkage,
 )
 from ._params import RigidWheel, WongSnow
@@ -120,17 +122,6 @@ def _rules(shear):
 
 def _is_concrete(x) -> bool:
     return not isinstance(x, jax.core.Tracer)
-
-
-def _layout(slip) -> str:
-    """Quadrature layout: "driving" (two panels) if no slip is < 0, else "braking".
-
-    Traced slips (under `jit`, `vmap`, `grad`) get the general "braking" layout, which is
-    valid for every slip, so that only one solver is compiled.
-    """
-    if not _is_concrete(slip):
-        return "braking"
-    return "braking" if np.any(np.asarray(slip) < 0) else "driving"
 
 
 def _validate_eagerly(wheel, snow, load, slip, shear) -> None:
@@ -362,15 +353,14 @@ def _solve_batch(wheel, snow, load, slip, guess, shear, n, max_steps, layout):
     `layout` is "driving" or "braking" when known before tracing (concrete slips), else
     "auto": a `lax.cond` on the traced slips picks one at run time.
     """
-    args = (wheel, snow, load, slip, guess)
-    solve = lambda braking: lambda ops: _solve_layout(  # noqa: E731
-        *ops, shear, n, max_steps, braking
+    return _with_rule_for(
+        slip,
+        shear,
+        lambda braking: _solve_layout(
+            wheel, snow, load, slip, guess, shear, n, max_steps, braking
+        ),
+        layout,
     )
-    if shear == "none" or layout == "driving":
-        return solve(False)(args)
-    if layout == "braking":
-        return solve(True)(args)
-    return jax.lax.cond(jnp.any(slip < 0), solve(True), solve(False), args)
 
 
 def _safe_inputs(valid, wheel, snow, load, slip):
