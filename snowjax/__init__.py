@@ -5,8 +5,13 @@ interaction* (MSc thesis, University of Alaska Fairbanks).  SI units throughout.
 """
 
 from ._params import BekkerSoil as BekkerSoil
+from ._params import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
+from ._params import LayeredSnow as LayeredSnow
+from ._params import ReeceSoil as ReeceSoil
 from ._params import RigidWheel as RigidWheel
+from ._params import Terrain as Terrain
 from ._params import WongSnow as WongSnow
+from ._distribution import WongReece as WongReece
 from ._terrain import bekker_pressure as bekker_pressure
 from ._terrain import gawwad_crolla_shear as gawwad_crolla_shear
 from ._terrain import gawwad_crolla_unloading_pressure as gawwad_crolla_unloading_pressure

@@ -35,7 +35,9 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ._params import RigidWheel, WongSnow
+from ._contact_general import _general_nodes_for, general_contact
+from ._distribution import WongReece
+from ._params import RigidWheel, Terrain, WongSnow
 from ._terrain import _signed_mobilisation
 
 ShearModel = Literal["classic", "simplified", "none"]
@@ -474,33 +476,45 @@ def _contact_scalar(
 
 def contact_forces(
     wheel: RigidWheel,
-    snow: WongSnow,
+    snow: Terrain,
     entry_angle: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     shear: ShearModel = "classic",
     nodes_per_panel: int | None = None,
+    *,
+    distribution: WongReece | None = None,
 ) -> ContactForces:
-    """Contact integrals of a rigid wheel on Wong snow at a given entry angle.
+    """Contact integrals of a rigid wheel on a terrain at a given entry angle.
 
     Vertical load (4.14), motion resistance (4.16), thrust ((2.9) times r b), drawbar pull
-    (2.10) and torque (2.12), integrated over the front contact 0 <= theta <= theta0 as in
-    the thesis.  All arguments broadcast against each other and against the leaves of
-    `wheel` and `snow`.
+    (2.10) and torque (2.12).  Without a `distribution` they are integrated over the
+    front contact 0 <= theta <= theta0 as in the thesis; with `WongReece` over
+    theta_r <= theta <= theta0.  All arguments broadcast against each other and against
+    the leaves of `wheel`, `snow` and `distribution`.
 
     **Arguments:**
 
-    - `wheel`, `snow`: parameter sets (SI).
-    - `entry_angle`: theta0 [rad], 0 < theta0 <= arccos(1 - 2 z_w / D).
+    - `wheel`: `RigidWheel`; `snow`: any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+      `LayeredSnow`), SI.
+    - `entry_angle`: theta0 [rad], 0 < theta0 <= arccos(1 - 2 depth / D).
     - `slip`: driving slip i [-], eq. (2.6); negative when braking.
-    - `shear`: `"classic"` (4.11), `"simplified"` (4.13) or `"none"`.
-    - `nodes_per_panel`: Gauss–Legendre nodes per panel (two panels when no slip is
-      negative, four otherwise; defaults as in `solve_wheel`).
+    - `shear`: `"classic"` (4.11), `"simplified"` (4.13; WongSnow without a
+      distribution only) or `"none"`.
+    - `nodes_per_panel`: Gauss–Legendre nodes per panel (defaults as in `solve_wheel`).
+    - `distribution`: None (front region) or `WongReece`.
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
-    _check_shear(shear)
-    n = _nodes_for(shear, nodes_per_panel)
-    return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, _layout(slip))
+    from ._wheel import _check_model, _is_thesis_path
+
+    _check_model(wheel, snow, distribution, shear)
+    if _is_thesis_path(snow, distribution):
+        n = _nodes_for(shear, nodes_per_panel)
+        return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, _layout(slip))
+    n = _general_nodes_for(shear, nodes_per_panel)
+    return _general_contact_forces_jit(
+        wheel, snow, distribution, entry_angle, slip, shear, n, _layout(slip)
+    )
 
 
 def _layout(slip) -> str:
@@ -547,6 +561,30 @@ def _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, layout):
             th, i, wh.diameter, wh.width, sn, shear, n[braking], braking=braking
         )
         return jax.vmap(fn)(theta0, slip, wheel, snow)
+
+    w, r, t, m = _with_rule_for(slip, shear, forces, layout)
+    reshape = lambda x: x.reshape(shape)  # noqa: E731
+    return ContactForces(
+        vertical_load=reshape(w),
+        motion_resistance=reshape(r),
+        thrust=reshape(t),
+        drawbar_pull=reshape(t - r),
+        torque=reshape(m),
+    )
+
+
+@eqx.filter_jit
+def _general_contact_forces_jit(wheel, terrain, distribution, entry_angle, slip, shear, n, layout):
+    shape, _, (wheel, terrain, distribution, theta0, slip) = _broadcast_leaves(
+        wheel, terrain, distribution, entry_angle, slip
+    )
+    fractions = None if distribution is None else distribution.angle_fractions(slip)
+
+    def forces(braking):
+        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
+            th, i, d, b, tr, fr, shear, n, braking
+        )
+        return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, fractions)
 
     w, r, t, m = _with_rule_for(slip, shear, forces, layout)
     reshape = lambda x: x.reshape(shape)  # noqa: E731

@@ -38,7 +38,9 @@ from ._contact import (
     _with_rule_for,
     max_sinkage,
 )
-from ._params import RigidWheel, WongSnow
+from ._contact_general import _general_nodes_for, general_contact
+from ._distribution import WongReece
+from ._params import LayeredSnow, RigidWheel, Terrain, WongSnow
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -95,44 +97,42 @@ class WheelState(eqx.Module):
 # Input validation
 # ---------------------------------------------------------------------------------------
 
-# (name, accessor, predicate, description of the allowed range)
-def _rules(shear):
-    cohesion_rule = (
-        (lambda c: c > 0, "> 0 Pa (the simplified model is normalised by c)")
-        if shear == "simplified"
-        else (lambda c: c >= 0, ">= 0 Pa")
-    )
-    return [
-        ("load", lambda wh, sn, ld, sl: ld, lambda x: x > 0, "> 0 N"),
-        ("slip", lambda wh, sn, ld, sl: sl, lambda x: (x >= -1) & (x <= 1), "in [-1, 1]"),
-        ("wheel.diameter", lambda wh, sn, ld, sl: wh.diameter, lambda x: x > 0, "> 0 m"),
-        ("wheel.width", lambda wh, sn, ld, sl: wh.width, lambda x: x > 0, "> 0 m"),
-        ("snow.p_w", lambda wh, sn, ld, sl: sn.p_w, lambda x: x > 0, "> 0 Pa"),
-        ("snow.z_w", lambda wh, sn, ld, sl: sn.z_w, lambda x: x > 0, "> 0 m"),
-        ("snow.cohesion", lambda wh, sn, ld, sl: sn.cohesion, *cohesion_rule),
-        ("snow.tan_phi", lambda wh, sn, ld, sl: sn.tan_phi, lambda x: x >= 0, ">= 0"),
-        (
-            "snow.shear_modulus",
-            lambda wh, sn, ld, sl: sn.shear_modulus,
-            lambda x: x > 0,
-            "> 0 m",
-        ),
+def _checks(wheel, terrain, distribution, load, slip, shear):
+    """Every validity rule: (name, value, ok mask, description of the allowed range).
+
+    Works on concrete values (eager errors) and on traced, flattened batches (status).
+    """
+    load = jnp.asarray(load)
+    slip = jnp.asarray(slip)
+    rules = [
+        ("load", load, load > 0, "> 0 N"),
+        ("slip", slip, (slip >= -1) & (slip <= 1), "in [-1, 1]"),
+        ("wheel.diameter", wheel.diameter, wheel.diameter > 0, "> 0 m"),
+        ("wheel.width", wheel.width, wheel.width > 0, "> 0 m"),
     ]
+    rules += [
+        (f"{terrain.label}.{name}", value, ok, allowed)
+        for name, value, ok, allowed in terrain.constraints(shear)
+    ]
+    if distribution is not None:
+        rules += distribution.constraints(slip)
+    return rules
 
 
 def _is_concrete(x) -> bool:
     return not isinstance(x, jax.core.Tracer)
 
 
-def _validate_eagerly(wheel, snow, load, slip, shear) -> None:
+def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     """Raise ValueError naming the argument when concrete inputs are out of range."""
-    for name, get, ok, allowed in _rules(shear):
-        value = get(wheel, snow, load, slip)
-        if not _is_concrete(value):
+    for name, value, ok, allowed in _checks(wheel, terrain, distribution, load, slip, shear):
+        if not (_is_concrete(value) and _is_concrete(ok)):
             continue
         arr = np.asarray(value, dtype=float)
-        good = np.isfinite(arr) & np.asarray(ok(arr))
+        good = np.isfinite(arr) & np.asarray(ok)
         if not np.all(good):
+            good = np.broadcast_to(good, np.broadcast_shapes(good.shape, arr.shape))
+            arr = np.broadcast_to(arr, good.shape)
             bad = np.argwhere(~good)
             where = f" at index {tuple(int(k) for k in bad[0])}" if arr.ndim else ""
             first = arr[tuple(bad[0])] if arr.ndim else arr
@@ -142,11 +142,10 @@ def _validate_eagerly(wheel, snow, load, slip, shear) -> None:
             )
 
 
-def _valid_mask(wheel, snow, load, slip, shear):
+def _valid_mask(wheel, terrain, distribution, load, slip, shear):
     valid = jnp.ones(load.shape, bool)
-    for _, get, ok, _ in _rules(shear):
-        value = get(wheel, snow, load, slip)
-        valid &= jnp.isfinite(value) & ok(value)
+    for _, value, ok, _ in _checks(wheel, terrain, distribution, load, slip, shear):
+        valid &= jnp.isfinite(value) & ok
     return valid
 
 
@@ -363,14 +362,14 @@ def _solve_batch(wheel, snow, load, slip, guess, shear, n, max_steps, layout):
     )
 
 
-def _safe_inputs(valid, wheel, snow, load, slip):
-    """Replace invalid elements by the thesis defaults so their (discarded) solve is finite."""
-    ref_wheel = RigidWheel.thesis_tire()
-    ref_snow = WongSnow.thesis_fresh_snow()
+def _safe_inputs(valid, wheel, terrain, load, slip, distribution=None):
+    """Replace invalid elements by valid reference values so their (discarded) solve is finite."""
     pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
-    wheel = jax.tree_util.tree_map(pick, wheel, ref_wheel)
-    snow = jax.tree_util.tree_map(pick, snow, ref_snow)
-    return wheel, snow, pick(load, 5000.0), pick(slip, 0.2)
+    wheel = jax.tree_util.tree_map(pick, wheel, RigidWheel.thesis_tire())
+    terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).reference())
+    if distribution is not None:
+        distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
+    return wheel, terrain, pick(load, 5000.0), pick(slip, 0.2), distribution
 
 
 # Elements solved together in one Newton iteration.  Chunks keep the quadrature's
@@ -399,8 +398,8 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
     shape, dtype, (wheel, snow, load, slip, guess) = _broadcast_leaves(
         wheel, snow, load, slip, guess
     )
-    valid = _valid_mask(wheel, snow, load, slip, shear)
-    wheel, snow, load, slip = _safe_inputs(valid, wheel, snow, load, slip)
+    valid = _valid_mask(wheel, snow, None, load, slip, shear)
+    wheel, snow, load, slip, _ = _safe_inputs(valid, wheel, snow, load, slip)
 
     theta0, r, t, m, status = _in_chunks(
         lambda ops: _solve_batch(*ops, shear, n, max_steps, layout),
@@ -420,13 +419,203 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
     )
 
 
+# ---------------------------------------------------------------------------------------
+# Any terrain, any stress distribution
+# ---------------------------------------------------------------------------------------
+
+def _scan_grid(terrain, dtype):
+    """Solver variable s at which W is scanned before Newton (increasing: deep to shallow).
+
+    s^2 from S_MIN^2 to S_MAX^2 in steps of 2 (theta0 from the cap down to 1e-7 of it, a
+    factor e^2 per step): enough to bracket the single root of a monotone W.  For a
+    `LayeredSnow`, whose W(theta0) can fall after the ice breaks, 39 more points with
+    theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
+    peak; a peak narrower than that can be missed (then a deeper root is returned).
+    """
+    s2 = np.linspace(S_MIN**2, S_MAX**2, 9)
+    if isinstance(terrain, LayeredSnow):
+        s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
+    return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
+
+
+def _solve_general_layout(wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking):
+    """Equilibrium on any terrain / distribution for a flat batch, one quadrature layout.
+
+    Without a warm start, W is first evaluated on a grid of entry angles (`_scan_grid`); the
+    shallowest grid interval where W crosses the load brackets the root (for a layered
+    snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
+    and interpolating ln W linearly in s^2 inside it (exact for a power law) starts
+    Newton, which is kept inside the bracket.  Elements Newton leaves unbalanced are
+    finished by bisection in the bracket (`lax.cond`: free when none needs it).
+    """
+    dtype = load.dtype
+    tol = _tolerance(dtype)
+    diameter, width = wheel.diameter, wheel.width
+    cos_base = 1 - 2 * terrain.depth / diameter  # -inf for an infinitely deep terrain
+    inside = cos_base > -1
+    theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
+    theta_cap = jnp.minimum(theta_base, MAX_ENTRY_ANGLE)
+    reaches_base = theta_base <= MAX_ENTRY_ANGLE
+    fractions = None if distribution is None else distribution.angle_fractions(slip)
+
+    def contact(theta0, vertical_only):
+        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
+            th, i, d, b, tr, fr, shear, n, braking, vertical_only
+        )
+        return jax.vmap(fn)(theta0, slip, diameter, width, terrain, fractions)
+
+    s_min = jnp.full_like(load, S_MIN)
+    s_max = jnp.full_like(load, S_MAX)
+    if guess is None:
+        s_grid = _scan_grid(terrain, dtype)
+        points = s_grid.shape[0]
+        w_grid = jax.vmap(lambda s: contact(_theta_from_s(s, theta_cap), True))(
+            jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
+        )
+        w_grid = jax.lax.stop_gradient(w_grid)
+        over = ~jnp.any(w_grid >= load, axis=0)
+        target = jnp.where(over, 0.5 * w_grid[0], load)
+        carried = w_grid >= target
+        # The shallowest grid point that carries the target (largest s), kept <= K - 2.
+        k = points - 1 - jnp.argmax(carried[::-1], axis=0)
+        k = jnp.clip(k, 0, points - 2)
+        lower = s_grid[k]
+        upper = s_grid[k + 1]
+        w_lo = jnp.take_along_axis(w_grid, k[None], 0)[0]
+        w_hi = jnp.take_along_axis(w_grid, k[None] + 1, 0)[0]
+        f_lo = jnp.log(jnp.maximum(w_lo, 1e-300) / target)
+        f_hi = jnp.log(jnp.maximum(w_hi, 1e-300) / target)
+        frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
+        s0 = jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
+    else:
+        w_top = jax.lax.stop_gradient(contact(_theta_from_s(s_min, theta_cap), True))
+        over = w_top < load
+        target = jnp.where(over, 0.5 * w_top, load)
+        lower, upper = s_min, s_max
+        s0 = _warm_start(guess, theta_cap)
+
+    def residual(s, args):
+        w = contact(_theta_from_s(s, theta_cap), True)
+        return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
+
+    newton = optx.root_find(
+        residual,
+        optx.Newton(rtol=tol, atol=tol),
+        jnp.clip(s0, lower, upper),
+        options=dict(lower=lower, upper=upper),
+        max_steps=max_steps,
+        throw=False,
+        tags=frozenset({lx.diagonal_tag}),
+    )
+    ok = (jnp.abs(newton.state.f) <= tol) | over
+    s = newton.value
+
+    def bisect():
+        def one(lo_k, hi_k, th_cap_k, target_k, i_k, d_k, b_k, terrain_k, fr_k):
+            def f(s, args):
+                th = _theta_from_s(s, th_cap_k)
+                w = general_contact(th, i_k, d_k, b_k, terrain_k, fr_k, shear, n, braking, True)
+                return w / target_k - 1
+
+            return optx.root_find(
+                f,
+                optx.Bisection(rtol=tol, atol=tol, flip=True),  # W decreases with s
+                0.5 * (lo_k + hi_k),
+                options=dict(lower=lo_k, upper=hi_k),
+                max_steps=256,
+                throw=False,
+            ).value
+
+        s_fixed = jax.lax.stop_gradient(s)
+        lo = jnp.where(ok, s_fixed, lower)
+        hi = jnp.where(ok, s_fixed, upper)
+        s_b = jax.vmap(one)(lo, hi, theta_cap, target, slip, diameter, width, terrain, fractions)
+        return jnp.where(ok, s, s_b)
+
+    s = jax.lax.cond(jnp.all(ok), lambda: s, bisect)
+    theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
+    w, r, t, m = contact(theta0, False)
+    balanced = jnp.abs(w / target - 1) <= 10 * tol
+    status = jnp.where(
+        over,
+        jnp.where(reaches_base, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT),
+        jnp.where(balanced, Status.CONVERGED, Status.NOT_CONVERGED),
+    )
+    return theta0, r, t, m, status.astype(jnp.int32)
+
+
+@eqx.filter_jit
+def _solve_general_jit(wheel, terrain, distribution, load, slip, shear, n, max_steps, guess, layout):
+    shape, dtype, (wheel, terrain, distribution, load, slip, guess) = _broadcast_leaves(
+        wheel, terrain, distribution, load, slip, guess
+    )
+    valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
+    wheel, terrain, load, slip, distribution = _safe_inputs(
+        valid, wheel, terrain, load, slip, distribution
+    )
+
+    def solve(ops):
+        wh, tr, ds, ld, sl, gs = ops
+        return _with_rule_for(
+            sl,
+            shear,
+            lambda braking: _solve_general_layout(
+                wh, tr, ds, ld, sl, gs, shear, n, max_steps, braking
+            ),
+            layout,
+        )
+
+    theta0, r, t, m, status = _in_chunks(
+        solve, (wheel, terrain, distribution, load, slip, guess), load.shape[0]
+    )
+    nan = jnp.asarray(jnp.nan, dtype)
+    out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
+    return WheelState(
+        entry_angle=out(theta0),
+        sinkage=out(max_sinkage(theta0, wheel.diameter)),
+        motion_resistance=out(r),
+        thrust=out(t),
+        drawbar_pull=out(t - r),
+        torque=out(m),
+        status=jnp.where(valid, status, Status.INVALID_INPUT).astype(jnp.int32).reshape(shape),
+    )
+
+
+def _check_model(wheel, terrain, distribution, shear) -> None:
+    """Type checks and the refused terrain / distribution / shear combinations."""
+    _check_shear(shear)
+    if not isinstance(wheel, RigidWheel):
+        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+    if not isinstance(terrain, Terrain):
+        raise TypeError(
+            "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
+            f"LayeredSnow), got {type(terrain).__name__}"
+        )
+    if distribution is not None and not isinstance(distribution, WongReece):
+        raise TypeError(
+            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+        )
+    if shear == "simplified" and (distribution is not None or not isinstance(terrain, WongSnow)):
+        raise ValueError(
+            "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
+            "of the contact: it needs a WongSnow terrain and distribution=None; use "
+            "shear='classic' for other terrains and for the Wong–Reece distribution."
+        )
+
+
+def _is_thesis_path(terrain, distribution) -> bool:
+    """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
+    return distribution is None and isinstance(terrain, WongSnow)
+
+
 def solve_wheel(
     wheel: RigidWheel,
-    snow: WongSnow,
+    terrain: Terrain,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     shear: ShearModel = "classic",
     *,
+    distribution: WongReece | None = None,
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
@@ -482,13 +671,16 @@ def solve_wheel(
     0.1-20 kPa, tan phi 0.02-0.8, shear modulus 2-80 mm, diameter 0.5-1.5 m, width
     0.1-0.6 m, load 0.1-20 kN, slip -0.5 to 0.99.
     """
-    _check_shear(shear)
-    if not isinstance(wheel, RigidWheel):
-        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
-    if not isinstance(snow, WongSnow):
-        raise TypeError(f"snow must be a snowjax.WongSnow, got {type(snow).__name__}")
-    _validate_eagerly(wheel, snow, load, slip, shear)
-    n = _nodes_for(shear, nodes_per_panel)
-    return _solve_wheel_jit(
-        wheel, snow, load, slip, shear, n, int(max_steps), initial_entry_angle, _layout(slip)
+    _check_model(wheel, terrain, distribution, shear)
+    _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
+    if _is_thesis_path(terrain, distribution):
+        n = _nodes_for(shear, nodes_per_panel)
+        return _solve_wheel_jit(
+            wheel, terrain, load, slip, shear, n, int(max_steps), initial_entry_angle,
+            _layout(slip),
+        )
+    n = _general_nodes_for(shear, nodes_per_panel)
+    return _solve_general_jit(
+        wheel, terrain, distribution, load, slip, shear, n, int(max_steps),
+        initial_entry_angle, _layout(slip),
     )

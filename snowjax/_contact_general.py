@@ -1,0 +1,216 @@
+"""Contact integrals of a rigid wheel on any terrain law, with any stress distribution.
+
+This is the path `solve_wheel` and `contact_forces` take for every terrain other than
+`WongSnow` with the thesis's front-region distribution (that case has its own,
+specialised quadrature in `_contact.py`).
+
+The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
+sinkage, shear stress by Janosi–Hanamoto from the shear displacement 4.10) are
+integrated over theta_r <= theta <= theta0 (0 <= theta <= theta0 without a
+distribution) by composite Gauss–Legendre quadrature.  The interval is cut at every
+angle where an integrand has a kink or a jump: theta_m (peak of the Wong–Reece
+distribution), the sign change of the shear displacement of a braked wheel, and, for
+`LayeredSnow`, the angles where the rim passes the ice layer's failure sinkage (front
+and mirrored rear).  Each piece is split in two halves whose nodes are graded towards
+their outer ends by `x = end -+ s sinh(mu t^2)`: near an end the node spacing grows
+like t^2, which makes the endpoint behaviour of power laws (sigma ~ (theta0 - theta)^n
+at the entry angle and the exit angle) smooth in t, and s (the width of the shear layer
+behind the entry angle or around the sign change) sets where the spacing starts to grow
+geometrically.
+
+Breakpoints carry gradients (the integration limits and the failure angle, where the
+integrand jumps, must); the grading scales do not (the exact integral does not depend
+on them).
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from ._params import LayeredSnow
+from ._terrain import _signed_mobilisation
+
+# Gauss–Legendre nodes per half-panel; see `solve_wheel` for the measured accuracy.
+DEFAULT_GENERAL_NODES = {"classic": 12, "none": 12}
+GRADING_POWER = 2
+
+
+def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> int:
+    """Gauss–Legendre nodes per half-panel of the general quadrature."""
+    if nodes_per_panel is None:
+        return DEFAULT_GENERAL_NODES[shear]
+    n = int(nodes_per_panel)
+    if n < 2:
+        raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
+    return n
+
+
+@functools.lru_cache(maxsize=None)
+def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    u, w = np.polynomial.legendre.leggauss(n)
+    return (u + 1) / 2, w / 2
+
+
+def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype):
+    """Nodes and weights on [lo, hi]: two halves graded towards lo and hi respectively.
+
+    `lo`, `hi`, `scale_*` have shape (P,); returns arrays of shape (P * 2 * n,).
+    Zero-length panels get zero weights.
+    """
+    t, w = _gauss_legendre(n)
+    t = jnp.asarray(t, dtype)
+    w = jnp.asarray(w, dtype)
+    q = GRADING_POWER
+    u = t**q
+    du = q * t ** (q - 1) * w
+    half = 0.5 * (hi - lo)
+    positive = half > 0
+    length = jnp.where(positive, half, 1.0)[:, None]
+
+    def graded(scale):
+        # s sinh(mu) = length: the last node maps to the panel's far end.
+        s = jax.lax.stop_gradient(jnp.clip(scale[:, None], 1e-3 * length, 10 * length))
+        mu = jnp.arcsinh(length / s)
+        e = jnp.exp(mu * u)
+        inv = 1 / e
+        return s * 0.5 * (e - inv), s * mu * 0.5 * (e + inv) * du
+
+    off_lo, jac_lo = graded(scale_lo)
+    off_hi, jac_hi = graded(scale_hi)
+    on = positive[:, None]
+    x_lo = jnp.where(on, lo[:, None] + off_lo, lo[:, None])
+    x_hi = jnp.where(on, hi[:, None] - off_hi, hi[:, None])
+    w_lo = jnp.where(on, jac_lo, 0.0)
+    w_hi = jnp.where(on, jac_hi, 0.0)
+    return (
+        jnp.concatenate([x_lo, x_hi], axis=1).reshape(-1),
+        jnp.concatenate([w_lo, w_hi], axis=1).reshape(-1),
+    )
+
+
+def _safe_arccos(x):
+    """arccos with a finite gradient at +-1 (clipped arguments get gradient 0)."""
+    inside = (x > -1) & (x < 1)
+    return jnp.where(inside, jnp.arccos(jnp.where(inside, x, 0.0)), jnp.where(x >= 1, 0.0, jnp.pi))
+
+
+def _rim_sinkage_between(theta_eff, theta0, diameter):
+    """z = r (cos theta_eff - cos theta0) = D sin((theta0 - t)/2) sin((theta0 + t)/2)."""
+    return diameter * jnp.sin((theta0 - theta_eff) / 2) * jnp.sin((theta0 + theta_eff) / 2)
+
+
+def _braking_split(theta0, theta_r, slip, diameter):
+    """Angle in (theta_r, theta0) where the shear displacement (4.10) changes sign.
+
+    Returns (angle, has_root).  For slip < 0 (k = 1 - i > 1),
+    f(theta) = (theta0 - theta) - k (sin theta0 - sin theta) is increasing on
+    |theta| < arccos(1/k) and vanishes at theta0; a second root exists when f(lo) < 0
+    and arccos(1/k) < theta0.  Newton from the left end, clipped to the bracket.
+    """
+    k = 1 - slip
+    f = lambda th: (theta0 - th) - k * (jnp.sin(theta0) - jnp.sin(th))  # noqa: E731
+    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))
+    lo = jnp.maximum(theta_r, -theta_star)
+    has_root = (slip < 0) & (f(lo) < 0) & (theta_star < theta0)
+
+    def newton(_, th):
+        slope = jnp.maximum(-1 + k * jnp.cos(th), 1e-12)
+        return jnp.clip(th - f(th) / slope, lo, theta_star)
+
+    th = jax.lax.fori_loop(0, 12, newton, lo)
+    return jnp.where(has_root, th, 0.5 * (theta_r + theta0)), has_root
+
+
+def general_contact(
+    theta0,
+    slip,
+    diameter,
+    width,
+    terrain,
+    fractions,
+    shear,
+    n,
+    braking=True,
+    vertical_only=False,
+):
+    """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
+
+    `fractions` is None (front region only, 0..theta0) or (theta_m / theta0,
+    theta_r / theta0) of the Wong–Reece distribution.  `braking=False` is valid only
+    for slip >= 0 (no sign change of the shear displacement).
+    """
+    dtype = theta0.dtype
+    r = diameter / 2
+    inf = jnp.asarray(jnp.inf, dtype)
+    if fractions is None:
+        theta_m = jnp.zeros_like(theta0)
+        theta_r = jnp.zeros_like(theta0)
+    else:
+        theta_m = fractions[0] * theta0
+        theta_r = fractions[1] * theta0
+
+    _, _, _, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
+    entry_slope = jnp.abs(1 - (1 - slip) * jnp.cos(theta0))
+    entry_scale = k_surface / (r * jnp.maximum(entry_slope, 1e-12))
+    if shear == "none":
+        entry_scale = inf
+
+    points = [(theta_r, inf), (theta0, entry_scale)]
+    if fractions is not None:
+        points.append((theta_m, inf))
+    if braking and shear != "none":
+        split, has_root = _braking_split(theta0, theta_r, slip, diameter)
+        split = jax.lax.stop_gradient(split)
+        z_split = _rim_sinkage_between(
+            jnp.where(split >= theta_m, split, theta0), theta0, diameter
+        )
+        k_split = terrain.rim_properties(z_split, width)[3]
+        slope = jnp.abs(-1 + (1 - slip) * jnp.cos(split))
+        split_scale = jnp.where(has_root, k_split / (r * jnp.maximum(slope, 1e-12)), inf)
+        points.append((split, split_scale))
+    if isinstance(terrain, LayeredSnow):
+        # Rim angle where the sinkage equals the ice layer's failure sinkage (front),
+        # and its mirror image in the rear region.
+        theta_f = _safe_arccos(jnp.cos(theta0) + terrain.failure_sinkage / r)
+        points.append((theta_f, inf))
+        if fractions is not None:
+            span = jnp.where(theta0 > theta_m, theta0 - theta_m, 1.0)
+            rear = theta_r + (theta0 - theta_f) / span * (theta_m - theta_r)
+            points.append((rear, inf))
+
+    angles = jnp.clip(jnp.stack([p[0] for p in points]), theta_r, theta0)
+    scales = jnp.stack([jnp.broadcast_to(p[1], theta0.shape) for p in points])
+    order = jnp.argsort(jax.lax.stop_gradient(angles))
+    angles = angles[order]
+    scales = scales[order]
+    theta, weight = _graded_half_panels(angles[:-1], angles[1:], scales[:-1], scales[1:], n, dtype)
+
+    # Normal stress: front region at the rim sinkage, rear region at the mirrored angle.
+    if fractions is None:
+        theta_eff = theta
+    else:
+        span = jnp.where(theta_m > theta_r, theta_m - theta_r, 1.0)
+        mirrored = theta0 - (theta - theta_r) / span * (theta0 - theta_m)
+        theta_eff = jnp.where(theta >= theta_m, theta, mirrored)
+    z = _rim_sinkage_between(theta_eff, theta0, diameter)
+    sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
+    sin = jnp.sin(theta)
+    cos = jnp.cos(theta)
+    if shear == "none":
+        tau = jnp.zeros_like(sigma)
+    else:
+        j = r * ((theta0 - theta) - (1 - slip) * (jnp.sin(theta0) - sin))
+        tau = (cohesion + sigma * tan_phi) * _signed_mobilisation(j / modulus)
+
+    rb = r * width
+    w_int = jnp.sum((sigma * cos + tau * sin) * weight) * rb
+    if vertical_only:
+        return w_int
+    r_int = jnp.sum(sigma * sin * weight) * rb
+    t_int = jnp.sum(tau * cos * weight) * rb
+    m_int = jnp.sum(tau * weight) * rb * r
+    return w_int, r_int, t_int, m_int

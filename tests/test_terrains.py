@@ -1,0 +1,301 @@
+"""The wheel on every terrain law (Bekker, Reece, Wong, layered snow) and both stress
+distributions (front region, Wong–Reece), against the independent SciPy reference."""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import snowjax as sj
+from snowjax import Status
+
+from . import reference_terrain as ref
+
+KINDS = ("bekker", "reece", "wong", "layered")
+# The reference's quad warns about round-off at its 1e-13 target on a few subintervals.
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+
+
+def random_cases(kind, m, seed):
+    """m random in-range cases; slips include braking (-0.5) and driving (0.9)."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(m):
+        d = dict(D=rng.uniform(0.5, 1.5), b=rng.uniform(0.1, 0.6), c=rng.uniform(0, 5e3),
+                 tp=rng.uniform(0.1, 0.8), K=rng.uniform(0.005, 0.05), slip=rng.uniform(-0.5, 0.9),
+                 th=rng.uniform(0.09, 1.2), c1=rng.uniform(0.3, 0.45), c2=rng.uniform(0.2, 0.4),
+                 c3=float(rng.choice([0.0, -0.1])))
+        if kind == "bekker":
+            d.update(n=rng.uniform(0.5, 1.6), kc=rng.uniform(0, 20e3), kphi=rng.uniform(50e3, 2000e3))
+        elif kind == "reece":
+            d.update(n=rng.uniform(0.5, 1.6), kcp=rng.uniform(0, 30), kpp=rng.uniform(100, 2000),
+                     g=rng.uniform(10e3, 20e3))
+        elif kind == "wong":
+            d.update(p_w=rng.uniform(5e3, 200e3), z_w=min(rng.uniform(0.05, 0.35), 0.45 * d["D"]))
+            d["th"] = rng.uniform(0.05, 0.99) * math.acos(1 - 2 * d["z_w"] / d["D"])
+        else:
+            p1 = rng.uniform(10e3, 60e3)
+            d.update(p1=p1, zw1=rng.uniform(0.05, 0.15), p2=rng.uniform(10e3, 80e3),
+                     pf=p1 * rng.uniform(1.0, 4.0))
+            d["zw2"] = min(d["zw1"] + rng.uniform(0.05, 0.25), 0.45 * d["D"])
+            d["zw1"] = min(d["zw1"], d["zw2"] - 0.02)
+            d["th"] = rng.uniform(0.05, 0.99) * math.acos(1 - 2 * d["zw2"] / d["D"])
+        out.append(d)
+    return out
+
+
+def terrain_of(kind, v):
+    if kind == "bekker":
+        return sj.BekkerSoil(v["n"], v["kc"], v["kphi"], v["c"], v["tp"], shear_modulus=v["K"])
+    if kind == "reece":
+        return sj.ReeceSoil(v["n"], v["kcp"], v["kpp"], v["g"], v["c"], v["tp"], shear_modulus=v["K"])
+    if kind == "wong":
+        return sj.WongSnow(v["p_w"], v["z_w"], v["c"], v["tp"], v["K"])
+    top = sj.WongSnow(v["p1"], v["zw1"], v["c"], v["tp"], v["K"])
+    bottom = sj.WongSnow(v["p2"], v["zw2"], v["c"], v["tp"], v["K"])
+    return sj.LayeredSnow(top, bottom, v["pf"])
+
+
+def law_of(kind, v):
+    """(reference pressure law, failure sinkage or None)."""
+    if kind == "bekker":
+        return ref.bekker(v["n"], v["kc"], v["kphi"]), None
+    if kind == "reece":
+        return ref.reece(v["n"], v["kcp"], v["kpp"], v["g"], v["c"]), None
+    if kind == "wong":
+        return ref.wong(v["p_w"], v["z_w"]), None
+    return ref.layered(v["p1"], v["zw1"], v["p2"], v["zw2"], v["pf"])
+
+
+def batch(kind, cases, wong_reece):
+    stack = lambda key: np.array([c[key] for c in cases])  # noqa: E731
+    terrain = jax.tree_util.tree_map(lambda *x: jnp.asarray(x), *[terrain_of(kind, c) for c in cases])
+    dist = sj.WongReece(stack("c1"), stack("c2"), stack("c3")) if wong_reece else None
+    return sj.RigidWheel(stack("D"), stack("b")), terrain, dist, stack
+
+
+def fractions(c, wong_reece):
+    return (c["c1"] + c["c2"] * c["slip"], c["c3"]) if wong_reece else (0.0, 0.0)
+
+
+COMBOS = [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)]
+
+
+@pytest.mark.parametrize("kind,wong_reece", COMBOS)
+def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
+    """W, R, T, M within 1e-7 (relative; 1e-3 W as the floor of the scale) of quad."""
+    cases = random_cases(kind, 12, seed=hash((kind, wong_reece)) % 1000)
+    wheel, terrain, dist, stack = batch(kind, cases, wong_reece)
+    f = sj.contact_forces(wheel, terrain, stack("th"), stack("slip"), distribution=dist)
+    got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
+    for k, c in enumerate(cases):
+        law, z_f = law_of(kind, c)
+        exp = ref.contact(c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"],
+                          *fractions(c, wong_reece), z_f=z_f)
+        scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
+        assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
+    assert np.allclose(f.drawbar_pull, f.thrust - f.motion_resistance)
+
+
+EQUILIBRIUM_CASES = {
+    "bekker": (sj.BekkerSoil.snow_us(), [(800.0, 0.3), (1000.0, -0.3)]),
+    "reece": (sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02), [(3000.0, 0.2), (3000.0, -0.2)]),
+    "wong": (sj.WongSnow.thesis_fresh_snow(), [(3000.0, 0.3), (3000.0, -0.3)]),
+    "layered": (sj.LayeredSnow.ice_layer_example(), [(2000.0, 0.3), (2500.0, -0.2)]),
+}
+
+
+def _ref_law(terrain):
+    if isinstance(terrain, sj.BekkerSoil):
+        return ref.bekker(float(terrain.n), float(terrain.k_c), float(terrain.k_phi)), None
+    if isinstance(terrain, sj.ReeceSoil):
+        return ref.reece(float(terrain.n), float(terrain.k_c_prime), float(terrain.k_phi_prime),
+                         float(terrain.unit_weight), float(terrain.cohesion)), None
+    if isinstance(terrain, sj.WongSnow):
+        return ref.wong(float(terrain.p_w), float(terrain.z_w)), None
+    t, b = terrain.top, terrain.bottom
+    return ref.layered(float(t.p_w), float(t.z_w), float(b.p_w), float(b.z_w),
+                       float(terrain.ice_failure_pressure))
+
+
+def _strength(terrain, layer="top"):
+    s = getattr(terrain, layer) if isinstance(terrain, sj.LayeredSnow) else terrain
+    return float(s.cohesion), float(s.tan_phi), float(s.shear_modulus)
+
+
+@pytest.mark.parametrize("kind,wong_reece", [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)])
+def test_equilibrium_matches_brentq(kind, wong_reece):
+    terrain, points = EQUILIBRIUM_CASES[kind]
+    wheel = sj.RigidWheel(0.736, 0.235)
+    dist = sj.WongReece(0.43, 0.32) if wong_reece else None
+    loads = np.array([p[0] for p in points])
+    slips = np.array([p[1] for p in points])
+    st = sj.solve_wheel(wheel, terrain, loads, slips, distribution=dist)
+    assert np.all(st.status == Status.CONVERGED), st.status
+    f = sj.contact_forces(wheel, terrain, st.entry_angle, slips, distribution=dist)
+    assert np.max(np.abs(f.vertical_load / loads - 1)) <= 1e-8
+    law, z_f = _ref_law(terrain)
+    c, tp, K = _strength(terrain)
+    for k, (load, slip) in enumerate(points):
+        fm, fr = (0.43 + 0.32 * slip, 0.0) if wong_reece else (0.0, 0.0)
+        theta0, (w, r, t, m) = ref.solve(load, slip, 0.736, 0.235, law, c, tp, K, fm, fr, z_f=z_f,
+                                         depth=float(terrain.depth), shallowest=kind == "layered",
+                                         lower=_strength(terrain, "bottom") if kind == "layered" else None)
+        assert float(st.entry_angle[k]) == pytest.approx(theta0, rel=1e-7)
+        assert float(st.drawbar_pull[k]) == pytest.approx(t - r, rel=1e-6, abs=1e-7 * load)
+        assert float(st.torque[k]) == pytest.approx(m, rel=1e-7)
+
+
+def test_done_means_batched_loads_slips_parameter_sets():
+    """The issue's call, batched over parameter sets x loads x slips, for every terrain."""
+    wheel = sj.RigidWheel(1.0, 0.4)
+    loads = np.array([1000.0, 2000.0, 3000.0])[:, None]
+    slips = np.array([-0.2, 0.1, 0.3, 0.6])[None, :]
+    dist = sj.WongReece(c1=0.43, c2=0.32)
+    base = {
+        "bekker": sj.BekkerSoil.snow_us(),
+        "reece": EQUILIBRIUM_CASES["reece"][0],
+        "wong": sj.WongSnow.thesis_fresh_snow(),
+        "layered": sj.LayeredSnow.ice_layer_example(),
+    }
+    for kind, terrain in base.items():
+        # Two parameter sets: scale every leaf by (1, 1.1) along a leading axis.
+        sets = jax.tree_util.tree_map(lambda x: jnp.asarray(x) * jnp.array([1.0, 1.1])[:, None, None], terrain)
+        st = sj.solve_wheel(wheel, sets, loads, slips, distribution=dist)
+        assert st.sinkage.shape == (2, 3, 4), kind
+        assert np.all(np.isin(np.asarray(st.status), [Status.CONVERGED, Status.BOTTOMED_OUT,
+                                                     Status.ENTRY_ANGLE_LIMIT])), (kind, st.status)
+        assert np.all(np.isfinite(st.drawbar_pull)) and np.all(np.isfinite(st.torque))
+        one = sj.solve_wheel(wheel, jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets), 2000.0, 0.3,
+                             distribution=dist)
+        assert float(one.sinkage) == pytest.approx(float(st.sinkage[1, 1, 2]), rel=1e-10)
+
+
+def _fd(fun, x, h):
+    return (fun(x + h) - fun(x - h)) / (2 * h)
+
+
+def test_gradients_wrt_k_phi_n_c1_match_central_differences():
+    wheel = sj.RigidWheel(1.0, 0.4)
+    soil = sj.BekkerSoil(1.1, 5e3, 800e3, 1e3, 0.6, shear_modulus=0.02)
+    loads = jnp.array([2000.0, 3000.0])
+    slips = jnp.array([0.3, -0.2])
+
+    def out(k_phi, n, c1):
+        s = sj.BekkerSoil(n, soil.k_c, k_phi, soil.cohesion, soil.tan_phi, shear_modulus=soil.shear_modulus)
+        st = sj.solve_wheel(wheel, s, loads, slips, distribution=sj.WongReece(c1, 0.32))
+        return jnp.stack([st.sinkage, st.drawbar_pull / 1e3, st.torque / 1e3])
+
+    x0 = (800e3, 1.1, 0.43)
+    jac = jax.jacfwd(out, argnums=(0, 1, 2))(*x0)
+    steps = (800.0, 1e-5, 1e-5)
+    for k in range(3):
+        def f(v, k=k):
+            args = list(x0)
+            args[k] = v
+            return np.asarray(out(*args))
+        fd = _fd(f, x0[k], steps[k])
+        np.testing.assert_allclose(np.asarray(jac[k]), fd, rtol=1e-5, atol=1e-9 * np.max(np.abs(fd)))
+    # Reverse mode agrees with forward mode.
+    g = jax.grad(lambda kp: jnp.sum(out(kp, 1.1, 0.43)))(800e3)
+    assert float(g) == pytest.approx(float(jnp.sum(jac[0])), rel=1e-8)
+
+
+def test_layered_pressure_rises_drops_at_ice_failure_then_rises_to_base():
+    snow = sj.LayeredSnow.ice_layer_example()
+    z_f = float(snow.failure_sinkage)
+    p_f = float(snow.ice_failure_pressure)
+    top, bottom = snow.top, snow.bottom
+    assert z_f == pytest.approx(float(top.z_w) * (1 - math.exp(-p_f / float(top.p_w))), rel=1e-14)
+    z = np.linspace(0, 0.299, 2000)
+    p = np.asarray(snow.pressure(z, 0.2))
+    before = z < z_f
+    assert np.all(np.diff(p[before]) > 0) and np.all(np.diff(p[~before]) > 0)  # rises on both branches
+    assert float(snow.pressure(z_f * (1 - 1e-12), 0.2)) == pytest.approx(p_f, rel=1e-9)  # fails at p_f
+    after = float(snow.pressure(z_f, 0.2))
+    assert after == pytest.approx(-float(bottom.p_w) * math.log1p(-z_f / float(bottom.z_w)), rel=1e-12)
+    assert after < 0.5 * p_f  # the sudden drop
+    assert float(snow.pressure(0.2999999, 0.2)) > 3 * p_f  # towards the base asymptote
+    assert float(snow.pressure(0.3, 0.2)) == np.inf
+
+
+def test_layered_wheel_breaks_through_the_ice_and_takes_the_shallowest_equilibrium():
+    """A strong crust makes W(theta0) non-monotone; solve_wheel returns the shallowest root,
+    and sinkage jumps (breaks through) once the load passes the crust's peak."""
+    top = sj.WongSnow(20e3, 0.08, 1e3, 0.3, 0.01)
+    bottom = sj.WongSnow(5e3, 0.30, 1e3, 0.3, 0.01)
+    snow = sj.LayeredSnow(top, bottom, 60e3)
+    wheel = sj.RigidWheel(0.736, 0.235)
+    theta = np.linspace(0.05, math.acos(1 - 2 * 0.3 / 0.736) * 0.999, 400)
+    w = np.asarray(sj.contact_forces(wheel, snow, theta, 0.2).vertical_load)
+    k_peak = int(np.argmax(np.diff(w) < 0))  # first decrease of W
+    assert k_peak > 0 and w[k_peak:].min() < 0.8 * w[k_peak]  # non-monotone
+    load = 0.8 * w[k_peak]
+    st = sj.solve_wheel(wheel, snow, load, 0.2)
+    assert int(st.status) == Status.CONVERGED
+    law, z_f = _ref_law(snow)
+    theta0, _ = ref.solve(load, 0.2, 0.736, 0.235, law, 1e3, 0.3, 0.01, z_f=z_f, depth=0.3,
+                          shallowest=True)
+    assert float(st.entry_angle) == pytest.approx(theta0, rel=1e-7)
+    assert float(st.entry_angle) < theta[k_peak]
+    # Past the crust's peak the wheel breaks through: the sinkage jumps.
+    heavy = sj.solve_wheel(wheel, snow, 1.1 * w[k_peak], 0.2)
+    assert float(heavy.sinkage) > float(st.sinkage) + 0.03
+
+
+def test_infinitely_deep_terrain_gives_entry_angle_limit_not_nan():
+    st = sj.solve_wheel(sj.RigidWheel(1.0, 0.4), sj.BekkerSoil.snow_us(), np.array([1e3, 1e6]), 0.2)
+    assert list(np.asarray(st.status)) == [Status.CONVERGED, Status.ENTRY_ANGLE_LIMIT]
+    assert float(st.entry_angle[1]) == pytest.approx(math.radians(85.0))
+    assert np.all(np.isfinite(st.drawbar_pull))
+
+
+def test_refused_combinations_and_bad_types():
+    wheel = sj.RigidWheel(1.0, 0.4)
+    with pytest.raises(ValueError, match="simplified"):
+        sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, "simplified")
+    with pytest.raises(ValueError, match="simplified"):
+        sj.solve_wheel(wheel, sj.WongSnow.thesis_fresh_snow(), 1000.0, 0.2, "simplified",
+                       distribution=sj.WongReece(0.43, 0.32))
+    with pytest.raises(TypeError, match="distribution"):
+        sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, distribution=(0.43, 0.32))
+    with pytest.raises(TypeError, match="terrain"):
+        sj.solve_wheel(wheel, wheel, 1000.0, 0.2)
+
+
+@pytest.mark.parametrize("name,terrain,dist,slip", [
+    ("terrain.n", sj.BekkerSoil(-1.0, 0.0, 1e5, 0.0, 0.5), None, 0.2),
+    ("terrain.shear_modulus", sj.BekkerSoil(1.0, 0.0, 1e5, 0.0, 0.5, shear_modulus=0.0), None, 0.2),
+    ("terrain.unit_weight", sj.ReeceSoil(1.0, 1.0, 1e3, -1.0, 1e3, 0.5), None, 0.2),
+    ("snow.bottom.z_w", sj.LayeredSnow(sj.WongSnow(2e4, 0.2, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), 5e4), None, 0.2),
+    ("snow.ice_failure_pressure", sj.LayeredSnow(sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.3, 0, 0.3, 0.01), 0.0), None, 0.2),
+    ("distribution.c1 + c2 * slip", sj.BekkerSoil.snow_us(), sj.WongReece(0.9, 0.32), 0.5),
+    ("distribution.c3", sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32, 0.6), 0.1),
+])
+def test_invalid_values_raise_eagerly_and_flag_under_jit(name, terrain, dist, slip):
+    wheel = sj.RigidWheel(1.0, 0.4)
+    with pytest.raises(ValueError, match=name.replace(".", r"\.").replace("+", r"\+").replace("*", r"\*")):
+        sj.solve_wheel(wheel, terrain, 1000.0, slip, distribution=dist)
+    st = jax.jit(lambda t, d: sj.solve_wheel(wheel, t, 1000.0, slip, distribution=d))(terrain, dist)
+    assert int(st.status) == Status.INVALID_INPUT and np.isnan(float(st.sinkage))
+
+
+def test_float32_general_path_has_no_nan():
+    cases = random_cases("bekker", 64, seed=5)
+    rng = np.random.default_rng(5)
+    wheel, terrain, dist, stack = batch("bekker", cases, True)
+    f32 = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32), t)  # noqa: E731
+    loads = rng.uniform(500, 8000, len(cases))
+    st = sj.solve_wheel(f32(wheel), f32(terrain), np.float32(loads), np.float32(stack("slip")),
+                        distribution=f32(dist))
+    assert st.sinkage.dtype == jnp.float32
+    ok = np.asarray(st.status) != Status.INVALID_INPUT
+    assert ok.all()
+    for field in ("sinkage", "drawbar_pull", "torque", "motion_resistance"):
+        assert np.all(np.isfinite(getattr(st, field))), field
+    st64 = sj.solve_wheel(wheel, terrain, loads, stack("slip"), distribution=dist)
+    both = (np.asarray(st.status) == 0) & (np.asarray(st64.status) == 0)
+    assert both.sum() > 40
+    assert np.max(np.abs(np.asarray(st.sinkage)[both] / np.asarray(st64.sinkage)[both] - 1)) < 1e-3
