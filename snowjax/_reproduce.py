@@ -28,6 +28,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ._fit import thesis_tire_table
+from ._reproduce_terrain import TERRAIN_CAPTION as _TERRAIN_CAPTION
 
 __all__ = ["FigureSpec", "FIGURES", "reproduce", "TABLE_3_2"]
 
@@ -1154,6 +1155,12 @@ def _status_names(codes):
     return {sj.Status(c).name for c in codes}
 
 
+def _fig_terrains(ctx):
+    from ._reproduce_terrain import terrain_figure
+
+    return terrain_figure(ctx, FigureResult, _subplots, _status_names)
+
+
 # ----------------------------------------------------------------------------------------
 # Registry of figures
 # ----------------------------------------------------------------------------------------
@@ -1243,6 +1250,9 @@ FIGURES: tuple[FigureSpec, ...] = (
                _fig_4_7),
     FigureSpec("4.8", "motion resistance vs slip (classic, simplified, no shear)",
                _WHEEL_CAPTION, ("4.11", "4.13", "4.14", "4.16"), _fig_4_8),
+    FigureSpec("T.1", "terrain laws and stress distributions: sinkage and drawbar pull vs slip",
+               _TERRAIN_CAPTION, ("2.1", "2.3", "4.5", "4.10", "4.11", "4.14", "Wong–Reece 1967"),
+               _fig_terrains),
 )
 
 
