@@ -117,4 +117,20 @@ from ._derivatives import thesis_table_4_5 as thesis_table_4_5
 from ._derivatives import thesis_table_4_6 as thesis_table_4_6
 from ._derivatives import thesis_appendix_dz_dsigma as thesis_appendix_dz_dsigma
 
+# --- CRREL shallow-snow model and validation (issue 16): snowjax/_crrel.py, _validate.py ---
+from ._crrel import CRREL_FINAL_DENSITIES as CRREL_FINAL_DENSITIES
+from ._crrel import CRRELWheel as CRRELWheel
+from ._crrel import crrel_contact_arc as crrel_contact_arc
+from ._crrel import crrel_drawbar as crrel_drawbar
+from ._crrel import crrel_final_density as crrel_final_density
+from ._crrel import crrel_sinkage as crrel_sinkage
+from ._crrel import crrel_wheel as crrel_wheel
+from ._validate import ValidationModel as ValidationModel
+from ._validate import ValidationResult as ValidationResult
+from ._validate import crrel_95_1_examples as crrel_95_1_examples
+from ._validate import shoop_2001_table11 as shoop_2001_table11
+from ._validate import validate as validate
+from ._validate import validation_models as validation_models
+from ._validate import wheel_validation_model as wheel_validation_model
+
 __version__ = "0.1.0"

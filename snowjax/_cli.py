@@ -13,6 +13,7 @@ import sys
 from . import _cli_fit, _cli_reproduce, _cli_sweep
 
 _SUBCOMMANDS = (_cli_reproduce, _cli_fit, _cli_sweep)
+_SUBCOMMANDS += (__import__(__package__ + "._cli_validate", fromlist=["register"]),)  # issue 16
 
 
 def main(argv: list[str] | None = None) -> int:

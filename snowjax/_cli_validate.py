@@ -1,0 +1,69 @@
+"""`snowjax validate`: compare the models with measured snow data and write `report.md`.
+
+`snowjax validate [--out DIR] [--include-uncertain] [--wheel-load N] [--tyre-width M]` runs
+`snowjax.validate` (snowjax/_validate.py): leave-one-out predictions of Shoop (2001),
+ERDC/CRREL TR-01-16 Table 11 (sinkage and snow resistance coefficient of a leading tyre) by
+the CRREL shallow-snow model, Richmond (2.23), the chapter-4 rigid wheel (Wong and Bekker
+snow), Bekker (2.24/2.25) and Van Es (2.26), plus the CRM-1 worked examples of CRREL 95-1.
+Writes report.md, metrics.csv, predictions.csv, crrel_95_1_examples.csv and
+predicted_vs_measured.png.  JAX is imported lazily and runs in float64.
+"""
+
+from __future__ import annotations
+
+import pathlib
+
+
+def register(sub) -> None:
+    """Add the `validate` subcommand to the `snowjax` argument parser."""
+    p = sub.add_parser(
+        "validate",
+        help="compare every model with measured snow data (Shoop 2001, CRREL 95-1)",
+        description="Leave-one-out validation of the snowjax models against measured "
+        "sinkage and resistance in snow (Shoop 2001, ERDC/CRREL TR-01-16, Table 11) and "
+        "the CRM-1 examples of CRREL 95-1; writes report.md, CSVs and a figure.",
+    )
+    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("snowjax-validate"),
+                   help="output directory (default: ./snowjax-validate)")
+    p.add_argument("--include-uncertain", action="store_true",
+                   help="also use the two Table 11 rows of uncertain tyre radius")
+    p.add_argument("--wheel-load", type=float, default=None,
+                   help="wheel load [N] (default 6800, from CRREL 95-7 Table 2)")
+    p.add_argument("--tyre-width", type=float, default=None,
+                   help="tyre width [m] (default 0.235, an assumption)")
+    p.set_defaults(run=run, parser=p)
+
+
+def run(args) -> int:
+    """Run the validation; print the table and the path of report.md."""
+    import time
+
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    from rich.console import Console
+
+    from ._validate import (
+        DEFAULT_TYRE_WIDTH,
+        DEFAULT_WHEEL_LOAD,
+        metrics_table_markdown,
+        validate,
+    )
+
+    load = DEFAULT_WHEEL_LOAD if args.wheel_load is None else args.wheel_load
+    width = DEFAULT_TYRE_WIDTH if args.tyre_width is None else args.tyre_width
+    if not load > 0:
+        args.parser.error("--wheel-load must be > 0 (newtons)")
+    if not 0 < width < 2:
+        args.parser.error("--tyre-width must be in (0, 2) metres")
+    console = Console()
+    start = time.perf_counter()
+    result = validate(args.out, include_uncertain=args.include_uncertain, wheel_load=load,
+                      tyre_width=width, progress=True)
+    console.print(metrics_table_markdown(result.metrics, result.models), markup=False)
+    for key, why in result.skipped.items():
+        console.print(f"[yellow]skipped {key}: {why}[/yellow]")
+    report = pathlib.Path(args.out) / "report.md"
+    console.print(f"{len(result.files)} files in {time.perf_counter() - start:.1f} s. "
+                  f"Report: [bold]{report}[/bold]")
+    return 0
