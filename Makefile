@@ -15,8 +15,9 @@ $(STAMP): pyproject.toml
 reproduce: $(STAMP)
 	$(BIN)/snowjax reproduce $(ARGS)
 
+# Two workers: XLA:CPU runs each compiled solve on one thread.
 test: $(STAMP)
-	$(BIN)/python -m pytest -q -m "not slow" $(ARGS)
+	$(BIN)/python -m pytest -q -n 2 -m "not slow" $(ARGS)
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q $(ARGS)

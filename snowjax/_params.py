@@ -286,8 +286,8 @@ class BekkerSoil(Terrain):
     def constraints(self, shear: str = "classic"):
         return [
             ("n", self.n, self.n > 0, "> 0"),
-            ("k_c", self.k_c, jnp.isfinite(self.k_c), "finite N/m^(n+1)"),
-            ("k_phi", self.k_phi, jnp.isfinite(self.k_phi), "finite N/m^(n+2)"),
+            ("k_c", self.k_c, self.k_c * 0 == 0, "finite N/m^(n+1)"),
+            ("k_phi", self.k_phi, self.k_phi * 0 == 0, "finite N/m^(n+2)"),
             *super().constraints(shear),
         ]
 
@@ -380,8 +380,8 @@ class ReeceSoil(Terrain):
     def constraints(self, shear: str = "classic"):
         return [
             ("n", self.n, self.n > 0, "> 0"),
-            ("k_c_prime", self.k_c_prime, jnp.isfinite(self.k_c_prime), "finite"),
-            ("k_phi_prime", self.k_phi_prime, jnp.isfinite(self.k_phi_prime), "finite"),
+            ("k_c_prime", self.k_c_prime, self.k_c_prime * 0 == 0, "finite"),
+            ("k_phi_prime", self.k_phi_prime, self.k_phi_prime * 0 == 0, "finite"),
             ("unit_weight", self.unit_weight, self.unit_weight >= 0, ">= 0 N/m^3"),
             *super().constraints(shear),
         ]

@@ -100,10 +100,9 @@ class WheelState(eqx.Module):
 def _checks(wheel, terrain, distribution, load, slip, shear):
     """Every validity rule: (name, value, ok mask, description of the allowed range).
 
-    Works on concrete values (eager errors) and on traced, flattened batches (status).
+    Works on NumPy values (eager errors) and on traced, flattened batches (status): the
+    rules use only arithmetic and comparisons.
     """
-    load = jnp.asarray(load)
-    slip = jnp.asarray(slip)
     rules = [
         ("load", load, load > 0, "> 0 N"),
         ("slip", slip, (slip >= -1) & (slip <= 1), "in [-1, 1]"),
@@ -124,8 +123,17 @@ def _is_concrete(x) -> bool:
 
 
 def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
-    """Raise ValueError naming the argument when concrete inputs are out of range."""
-    for name, value, ok, allowed in _checks(wheel, terrain, distribution, load, slip, shear):
+    """Raise ValueError naming the argument when concrete inputs are out of range.
+
+    Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
+    """
+    to_np = lambda x: np.asarray(x) if _is_concrete(x) else x  # noqa: E731
+    wheel, terrain, distribution, load, slip = jax.tree_util.tree_map(
+        to_np, (wheel, terrain, distribution, load, slip)
+    )
+    with np.errstate(invalid="ignore", over="ignore"):
+        rules = _checks(wheel, terrain, distribution, load, slip, shear)
+    for name, value, ok, allowed in rules:
         if not (_is_concrete(value) and _is_concrete(ok)):
             continue
         arr = np.asarray(value, dtype=float)
