@@ -582,7 +582,7 @@ def _general_contact_forces_jit(wheel, terrain, distribution, entry_angle, slip,
 
     def forces(braking):
         fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
-            th, i, d, b, tr, fr, shear, n, braking
+            th, i, d, b, tr, fr, shear, n[braking], braking
         )
         return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, fractions)
 

@@ -34,19 +34,20 @@ import numpy as np
 from ._params import LayeredSnow
 from ._terrain import _signed_mobilisation
 
-# Gauss–Legendre nodes per half-panel; see `solve_wheel` for the measured accuracy.
-DEFAULT_GENERAL_NODES = {"classic": 12, "none": 12}
+# Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
+# README for the measured accuracy.
+DEFAULT_GENERAL_NODES = {"classic": (12, 16), "none": (12, 12)}
 GRADING_POWER = 2
 
 
-def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> int:
-    """Gauss–Legendre nodes per half-panel of the general quadrature."""
+def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, int]:
+    """Gauss–Legendre nodes per half-panel (without braking, with braking)."""
     if nodes_per_panel is None:
         return DEFAULT_GENERAL_NODES[shear]
     n = int(nodes_per_panel)
     if n < 2:
         raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
-    return n
+    return n, n
 
 
 @functools.lru_cache(maxsize=None)

@@ -568,7 +568,7 @@ def _solve_general_jit(wheel, terrain, distribution, load, slip, shear, n, max_s
             sl,
             shear,
             lambda braking: _solve_general_layout(
-                wh, tr, ds, ld, sl, gs, shear, n, max_steps, braking
+                wh, tr, ds, ld, sl, gs, shear, n[braking], max_steps, braking
             ),
             layout,
         )
