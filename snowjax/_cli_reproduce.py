@@ -61,7 +61,7 @@ def run(args) -> int:
     extra = [n for n in ("wheel_sweep.csv", "derivative_tables.csv") if n in written]
     console.print(f"Also written: {', '.join(extra)}.")
     report = pathlib.Path(args.out) / "report.md"
-    console.print(f"{len(files)} files in {elapsed:.1f} s. Report: [bold]{report}[/bold]")
+    console.print(f"{len(files)} files in {elapsed:.1f} s. Report: [bold]{report}[/bold]", soft_wrap=True)
     if missing:
         console.print(f"[red]Figures not produced: {', '.join(missing)}[/red]")
         return 1

@@ -170,7 +170,8 @@ def test_done_means_batched_loads_slips_parameter_sets():
         assert np.all(np.isfinite(st.drawbar_pull)) and np.all(np.isfinite(st.torque))
         one = sj.solve_wheel(wheel, jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets), 2000.0, 0.3,
                              distribution=dist)
-        assert float(one.sinkage) == pytest.approx(float(st.sinkage[1, 1, 2]), rel=1e-10)
+        # The single driving case uses the 12-node rule, the braking batch the 16-node one.
+        assert float(one.sinkage) == pytest.approx(float(st.sinkage[1, 1, 2]), rel=1e-8)
 
 
 def _fd(fun, x, h):
