@@ -81,6 +81,7 @@ from ._empirical import van_es_rolling_resistance as van_es_rolling_resistance
 
 # --- calibration (issue 5): snowjax/_fit.py ---
 from ._fit import FitResult as FitResult
+from ._fit import fit_parameter_names as fit_parameter_names
 from ._fit import fit_plate_sinkage as fit_plate_sinkage
 from ._fit import fit_tire_coefficients as fit_tire_coefficients
 from ._fit import fit_wheel as fit_wheel

@@ -14,7 +14,12 @@ ignored.  Column names (SI units unless stated):
   `drawbar_pull_N` [N], `motion_resistance_N` [N].  The wheel is `--diameter`/`--width`;
   the snow parameters named by `--fit` are fitted (starting from the `--p-w`, `--z-w`,
   ... values), the others are held at those values (defaults: the thesis's fresh snow,
-  `WongSnow.thesis_fresh_snow()`).
+  `WongSnow.thesis_fresh_snow()`).  Other terrains: `--terrain bekker|reece|layered`
+  with `--preset` and the parameter options of `snowjax sweep` (`--n`, `--k-c`,
+  `--k-phi`, `--k-c-prime`, `--k-phi-prime`, `--unit-weight`, `--cohesion`, `--tan-phi`,
+  `--shear-modulus`, `--set top.p_w=...`); `--distribution wong-reece` with `--c1`,
+  `--c2`, `--c3`.  `--fit` then names any of their leaves (`k_phi,n,c1`, `top.p_w`);
+  it is required for these terrains.
 
 Output: a table (or `--json`: params, stderr, units, sse, residuals, warnings,
 correlation, condition_number, dof, success, num_steps).  A malformed file (missing
@@ -167,9 +172,14 @@ def register(sub) -> None:
         "values (defaults: the thesis's fresh snow).",
     )
     common(wheel)
-    wheel.add_argument("--fit", default="p_w,z_w,tan_phi",
-                       help="comma-separated WongSnow fields to fit (p_w, z_w, cohesion, "
-                       "tan_phi, shear_modulus); default p_w,z_w,tan_phi")
+    wheel.add_argument("--fit", default=None,
+                       help="comma-separated parameters to fit: WongSnow fields (p_w, z_w, "
+                       "cohesion, tan_phi, shear_modulus; default p_w,z_w,tan_phi) or, with "
+                       "--terrain / --distribution, any of their leaves (e.g. k_phi,n,c1)")
+    wheel.add_argument("--terrain", choices=("wong", "bekker", "reece", "layered"),
+                       default="wong", help="terrain law (default %(default)s)")
+    wheel.add_argument("--preset", default=None,
+                       help="preset of the terrain (as `snowjax sweep --preset`)")
     wheel.add_argument("--diameter", type=float, default=0.736, help="wheel diameter D [m]")
     wheel.add_argument("--width", type=float, default=0.235, help="wheel width b [m]")
     wheel.add_argument("--p-w", type=float, default=None, help="p_w [Pa] (start or fixed value)")
@@ -177,6 +187,17 @@ def register(sub) -> None:
     wheel.add_argument("--cohesion", type=float, default=None, help="c [Pa]")
     wheel.add_argument("--tan-phi", type=float, default=None, help="tan(phi) [-]")
     wheel.add_argument("--shear-modulus", type=float, default=None, help="K [m]")
+    for option, unit in (("n", "-"), ("k-c", "N/m^(n+1)"), ("k-phi", "N/m^(n+2)"),
+                         ("k-c-prime", "-"), ("k-phi-prime", "-"), ("unit-weight", "N/m^3")):
+        wheel.add_argument(f"--{option}", type=float, default=None,
+                           help=f"{option.replace('-', '_')} [{unit}] (start or fixed value)")
+    wheel.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
+                       help="any terrain leaf by name, e.g. top.p_w=30e3 (repeatable)")
+    wheel.add_argument("--distribution", choices=("none", "wong-reece"), default="none",
+                       help="stress distribution (default %(default)s)")
+    for option in ("c1", "c2", "c3"):
+        wheel.add_argument(f"--{option}", type=float, default=None,
+                           help=f"Wong-Reece {option} [-] (start or fixed value)")
     wheel.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
     wheel.add_argument("--max-steps", type=int, default=100, help="Levenberg-Marquardt steps")
     wheel.set_defaults(run=run)
@@ -212,7 +233,7 @@ def run(args) -> int:
     import numpy as np
 
     from . import _fit
-    from ._params import RigidWheel, WongSnow
+    from ._params import RigidWheel
 
     try:
         if kind == "plate":
@@ -238,19 +259,22 @@ def run(args) -> int:
                 *(np.array(cols[c]) for c in ("load_kN", "cs", "ca", "mux", "muy", "e1"))
             )
         else:
-            base = WongSnow.thesis_fresh_snow()
-            given = {"p_w": args.p_w, "z_w": args.z_w, "cohesion": args.cohesion,
-                     "tan_phi": args.tan_phi, "shear_modulus": args.shear_modulus}  # fmt: skip
-            snow = WongSnow(**{k: float(getattr(base, k)) if v is None else v
-                               for k, v in given.items()})  # fmt: skip
-            names = tuple(s.strip() for s in args.fit.split(",") if s.strip())
+            snow, distribution = _wheel_model(args)
+            fit_text = args.fit
+            if fit_text is None:
+                if not (args.terrain == "wong" and distribution is None):
+                    names = ", ".join(_fit.fit_parameter_names(snow, distribution))
+                    raise ValueError(f"give --fit: the parameters to fit, among {names}")
+                fit_text = "p_w,z_w,tan_phi"
+            names = tuple(s.strip() for s in fit_text.split(",") if s.strip())
             measured = {q: np.array(cols[c]) for q, c in (
                 ("sinkage", "sinkage_m"), ("drawbar_pull", "drawbar_pull_N"),
                 ("motion_resistance", "motion_resistance_N")) if c in cols}  # fmt: skip
             result = _fit.fit_wheel(
                 RigidWheel(args.diameter, args.width), snow,
                 np.array(cols["load_N"]), np.array(cols["slip"]),
-                fit=names, shear=args.shear, max_steps=args.max_steps, **measured,
+                fit=names, shear=args.shear, max_steps=args.max_steps,
+                distribution=distribution, **measured,
             )  # fmt: skip
     except (ValueError, TypeError) as e:
         return _fail(f"{path}: {e}")
@@ -262,3 +286,51 @@ def run(args) -> int:
         print(f"data: {path}")
         print(result.table())
     return 0
+
+
+def _wheel_model(args):
+    """(terrain, distribution) of `fit wheel` from its options (start / fixed values)."""
+    from ._cli_sweep import terrain_from_options
+    from ._distribution import WongReece
+    from ._params import WongSnow
+
+    wong_only = {"p_w": args.p_w, "z_w": args.z_w}
+    shared = {"cohesion": args.cohesion, "tan_phi": args.tan_phi,
+              "shear_modulus": args.shear_modulus}  # fmt: skip
+    other = {"n": args.n, "k_c": args.k_c, "k_phi": args.k_phi, "k_c_prime": args.k_c_prime,
+             "k_phi_prime": args.k_phi_prime, "unit_weight": args.unit_weight}  # fmt: skip
+    given = {k: v for k, v in {**wong_only, **shared, **other}.items() if v is not None}
+    options = {("terrain", k): f"--{k.replace('_', '-')}" for k in given}
+    for item in args.set:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        try:
+            value = float(text)
+        except ValueError:
+            value = None
+        if not sep or not name or value is None:
+            raise ValueError(f"--set {item!r}: expected NAME=VALUE, e.g. top.p_w=30e3")
+        if name in given:
+            raise ValueError(f"--set {item!r}: {name} is given twice")
+        given[name] = value
+        options[("terrain", name)] = f"--set {name}"
+    if args.terrain == "wong" and args.preset in (None, "thesis") and set(given) <= set(
+        wong_only
+    ) | set(shared):
+        # The thesis's fresh snow with the given values replacing its own.
+        base = WongSnow.thesis_fresh_snow()
+        snow = WongSnow(**{k: float(given.get(k, getattr(base, k))) for k in (
+            "p_w", "z_w", "cohesion", "tan_phi", "shear_modulus")})  # fmt: skip
+    else:
+        snow = terrain_from_options(args.terrain, args.preset, None, given, options)
+    coefficients = {"c1": args.c1, "c2": args.c2, "c3": args.c3}
+    if args.distribution == "none":
+        bad = [f"--{k}" for k, v in coefficients.items() if v is not None]
+        if bad:
+            raise ValueError(f"{', '.join(bad)} only apply with --distribution wong-reece")
+        return snow, None
+    ref = WongReece.reference()
+    distribution = WongReece(
+        **{k: float(getattr(ref, k)) if v is None else v for k, v in coefficients.items()}
+    )
+    return snow, distribution

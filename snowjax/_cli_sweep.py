@@ -2,15 +2,35 @@
 
     snowjax sweep --loads 2000:8000:13 --slips 0:0.9:10 --p-w 60e3,85.55e3 --out DIR
 
+    snowjax sweep --terrain bekker --preset snow-us --k-phi 150e3,200e3 \
+        --distribution wong-reece --c1 0.43 --c2 0.32 --loads 300:900:4 --out DIR
+
 Value lists are `start:stop:num` (like `numpy.linspace`), a comma list, or one value.
 By default the sweep is the grid parameter sets x loads x slips; parameter options
 given as lists are zipped into parameter sets (equal lengths, or one value), or
 combined into every combination with `--param-grid`.  `--list` zips loads, slips and
-parameter lists instead of the grid (one point each).  The snow presets are the thesis's
-Table 4.1 ratios for D = 0.736 m; when only `--p-w` is given the cohesion follows
-c = 0.2165 p_w.  Running the same command again resumes an interrupted sweep; a
-different sweep in the same `--out` is refused (use `--restart` to discard it).
-See `snowjax.sweep`.
+parameter lists instead of the grid (one point each).
+
+Terrains (`--terrain`, SI units):
+  wong     WongSnow: --p-w [Pa] --z-w [m] --cohesion [Pa] --tan-phi [-]
+           --shear-modulus [m]; presets (--preset or --snow) thesis (default),
+           plate-rule: the thesis's Table 4.1 ratios for D = 0.736 m; when only
+           --p-w is given the cohesion follows c = 0.2165 p_w.
+  bekker   BekkerSoil: --n [-] --k-c [N/m^(n+1)] --k-phi [N/m^(n+2)] --cohesion
+           --tan-phi --shear-modulus; presets snow-us (default), snow-harrison,
+           snow-sweden (Wong, Table 2.3), thesis-lab-snow.
+  reece    ReeceSoil: --n --k-c-prime [-] --k-phi-prime [-] --unit-weight [N/m^3]
+           --cohesion --tan-phi (all required: no preset) --shear-modulus (default
+           10 mm).
+  layered  LayeredSnow: preset ice-layer-example (default); its leaves are set with
+           --set top.p_w=30e3 --set bottom.z_w=0.3 --set ice_failure_pressure=60e3.
+`--set NAME=VALUES` sets any terrain leaf by its column name (repeatable).
+Stress distribution: `--distribution none` (default, the thesis's front region) or
+`wong-reece` with --c1, --c2, --c3 [-] (defaults 0.43, 0.32, 0; lists allowed).
+
+Running the same command again resumes an interrupted sweep; a different sweep (also
+another terrain or distribution) in the same `--out` is refused (use `--restart` to
+discard it).  See `snowjax.sweep`.
 """
 
 from __future__ import annotations
@@ -28,7 +48,24 @@ _PARAMETERS = (
     ("shear-modulus", "shear_modulus", "snow", "m"),
     ("diameter", "diameter", "wheel", "m"),
     ("width", "width", "wheel", "m"),
+    ("n", "n", "terrain", "-"),
+    ("k-c", "k_c", "terrain", "N/m^(n+1)"),
+    ("k-phi", "k_phi", "terrain", "N/m^(n+2)"),
+    ("k-c-prime", "k_c_prime", "terrain", "-"),
+    ("k-phi-prime", "k_phi_prime", "terrain", "-"),
+    ("unit-weight", "unit_weight", "terrain", "N/m^3"),
+    ("c1", "c1", "distribution", "-"),
+    ("c2", "c2", "distribution", "-"),
+    ("c3", "c3", "distribution", "-"),
 )
+_TERRAINS = ("wong", "bekker", "reece", "layered")
+_PRESETS = {
+    "wong": ("thesis", "plate-rule"),
+    "bekker": ("snow-us", "snow-harrison", "snow-sweden", "thesis-lab-snow"),
+    "reece": (),
+    "layered": ("ice-layer-example",),
+}
+_REECE_REQUIRED = ("n", "k_c_prime", "k_phi_prime", "unit_weight", "cohesion", "tan_phi")
 
 
 def register(sub) -> None:
@@ -42,11 +79,22 @@ def register(sub) -> None:
     p.add_argument("--slips", default="0:0.9:10", help="driving slips [-] (default %(default)s)")
     p.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
     p.add_argument(
+        "--terrain", choices=_TERRAINS, default="wong",
+        help="terrain law: WongSnow, BekkerSoil, ReeceSoil or LayeredSnow (default %(default)s)",
+    )
+    p.add_argument(
+        "--preset", default=None,
+        help="preset parameter set of the terrain: wong: thesis (default), plate-rule;"
+        " bekker: snow-us (default), snow-harrison, snow-sweden, thesis-lab-snow;"
+        " layered: ice-layer-example (default); reece: none",
+    )
+    p.add_argument(
         "--snow",
         choices=("thesis", "plate-rule"),
-        default="thesis",
-        help="preset snow: the thesis's fresh snow (p_w 85.55 kPa) or its plate-rule variant"
-        " (p_w 12.92 kPa), Table 4.1 ratios for D = 0.736 m (default %(default)s)",
+        default=None,
+        help="(--terrain wong) preset snow: the thesis's fresh snow (p_w 85.55 kPa) or its"
+        " plate-rule variant (p_w 12.92 kPa), Table 4.1 ratios for D = 0.736 m (default"
+        " thesis)",
     )
     for option, field, obj, unit in _PARAMETERS:
         p.add_argument(
@@ -55,6 +103,15 @@ def register(sub) -> None:
             metavar="VALUES",
             help=f"override {obj} {field} [{unit}]; a list gives several parameter sets",
         )
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUES",
+        help="set any terrain leaf by its column name, e.g. top.p_w=30e3 (repeatable)",
+    )
+    p.add_argument(
+        "--distribution", choices=("none", "wong-reece"), default="none",
+        help="stress distribution: the thesis's front region or Wong-Reece (1967) with"
+        " --c1, --c2, --c3 (default %(default)s)",
+    )
     p.add_argument(
         "--param-grid",
         action="store_true",
@@ -112,54 +169,157 @@ def _values(text: str, option: str):
 
 
 def _build(args):
-    """The sweep's inputs from the options: (wheel, snow, loads, slips, formats)."""
+    """The sweep's inputs from the options: (wheel, terrain, distribution, loads, slips,
+    formats)."""
     import numpy as np
 
-    from ._params import THESIS_P_W, PLATE_RULE_P_W, RigidWheel, WongSnow
+    from ._distribution import WongReece
+    from ._params import RigidWheel
 
     loads = _values(args.loads, "loads")
     slips = _values(args.slips, "slips")
+    # Every parameter option given: key -> (object, field path, values, option text).
     given = {}
-    for option, field, _, _ in _PARAMETERS:
+    for option, field, obj, _ in _PARAMETERS:
         text = getattr(args, option.replace("-", "_"))
         if text is not None:
-            given[field] = _values(text, option)
-    options = {field: option for option, field, _, _ in _PARAMETERS}
-    multi = [f for f, v in given.items() if v.size > 1]
+            given[option] = (obj, field, _values(text, option), f"--{option}")
+    for item in args.set:
+        name, sep, text = item.partition("=")
+        name = name.strip()
+        if not sep or not name:
+            raise ValueError(f"--set {item!r}: expected NAME=VALUES, e.g. top.p_w=30e3")
+        if f"set:{name}" in given or any(f == name for _, f, *_ in given.values()):
+            raise ValueError(f"--set {item!r}: {name} is given twice")
+        given[f"set:{name}"] = ("terrain", name, _values(text, "set " + name), f"--set {name}")
+    multi = [k for k, v in given.items() if v[2].size > 1]
     if args.param_grid and not args.list:
         # Every combination of the parameter lists (first option slowest).
-        combos = np.array(list(itertools.product(*(given[f] for f in multi))))
-        for j, f in enumerate(multi):
-            given[f] = combos[:, j]
-    elif not args.list and len({given[f].size for f in multi}) > 1:
-        sizes = ", ".join(f"--{options[f]} has {given[f].size}" for f in multi)
+        combos = np.array(list(itertools.product(*(given[k][2] for k in multi))))
+        for j, k in enumerate(multi):
+            given[k] = (*given[k][:2], combos[:, j], given[k][3])
+    elif not args.list and len({given[k][2].size for k in multi}) > 1:
+        sizes = ", ".join(f"{given[k][3]} has {given[k][2].size}" for k in multi)
         raise ValueError(
             f"parameter lists are zipped into parameter sets and must have the same length"
             f" (or one value): {sizes}; use --param-grid for every combination"
         )
-    value = lambda f, default: (  # noqa: E731
-        (given[f][0] if given[f].size == 1 else given[f]) if f in given else default
-    )
-    # The presets are the thesis's Table 4.1 ratios for D = 0.736 m; the cohesion follows
-    # c = 0.2165 p_w when only p_w is overridden.
-    preset_p_w = THESIS_P_W if args.snow == "thesis" else PLATE_RULE_P_W
-    preset = WongSnow.thesis_fresh_snow(p_w=value("p_w", preset_p_w))
-    snow = WongSnow(
-        p_w=preset.p_w,
-        z_w=value("z_w", preset.z_w),
-        cohesion=value("cohesion", preset.cohesion),
-        tan_phi=value("tan_phi", preset.tan_phi),
-        shear_modulus=value("shear_modulus", preset.shear_modulus),
-    )
+    values = {}  # (object, field) -> scalar or array
+    for obj, field, x, _ in given.values():
+        values[("terrain" if obj == "snow" else obj, field)] = x[0] if x.size == 1 else x
+    options = {(("terrain" if obj == "snow" else obj), field): opt
+               for obj, field, _, opt in given.values()}  # fmt: skip
+    value = lambda obj, f, default: values.get((obj, f), default)  # noqa: E731
+
+    terrain_given = {f: v for (obj, f), v in values.items() if obj == "terrain"}
+    snow = terrain_from_options(args.terrain, args.preset, args.snow, terrain_given, options)
+    dist_given = {f: v for (obj, f), v in values.items() if obj == "distribution"}
+    if args.distribution == "wong-reece":
+        ref = WongReece.reference()
+        distribution = WongReece(
+            c1=value("distribution", "c1", ref.c1),
+            c2=value("distribution", "c2", ref.c2),
+            c3=value("distribution", "c3", ref.c3),
+        )
+    else:
+        if dist_given:
+            raise ValueError(
+                ", ".join(options[("distribution", f)] for f in dist_given)
+                + " only apply with --distribution wong-reece"
+            )
+        distribution = None
     thesis = RigidWheel.thesis_tire()
     wheel = RigidWheel(
-        diameter=value("diameter", thesis.diameter), width=value("width", thesis.width)
+        diameter=value("wheel", "diameter", thesis.diameter),
+        width=value("wheel", "width", thesis.width),
     )
     formats = tuple(f.strip() for f in args.format.split(",") if f.strip() and f.strip() != "none")
     for f in formats:
         if f not in ("npz", "csv"):
             raise ValueError(f"--format {args.format!r}: choose from npz, csv, none")
-    return wheel, snow, loads, slips, formats
+    return wheel, snow, distribution, loads, slips, formats
+
+
+def terrain_from_options(terrain_kind, preset_name, snow_preset, terrain_given, options):
+    """The terrain of `--terrain`, `--preset` / `--snow` and the parameter options.
+
+    - `terrain_kind`: "wong", "bekker", "reece" or "layered".
+    - `preset_name`: `--preset` (or None for the default preset); `snow_preset`:
+      `--snow` (WongSnow only, or None).
+    - `terrain_given`: field path -> value (scalar or 1-D array, SI units).
+    - `options`: ("terrain", field path) -> option text, for the error messages.
+
+    Raises `ValueError` naming the option for a parameter the terrain does not have, an
+    unknown preset or missing parameters.
+    """
+    import numpy as np
+
+    from ._params import THESIS_P_W, PLATE_RULE_P_W, BekkerSoil, LayeredSnow, ReeceSoil
+    from ._params import WongSnow
+    from ._sweep import _module_leaves, _with_leaves
+
+    value = lambda f, default: terrain_given.get(f, default)  # noqa: E731
+    if snow_preset is not None:
+        if terrain_kind != "wong":
+            raise ValueError(
+                f"--snow is a WongSnow preset; use --preset with --terrain {terrain_kind}"
+            )
+        if preset_name is not None and preset_name != snow_preset:
+            raise ValueError(f"--snow {snow_preset} and --preset {preset_name} disagree")
+        preset_name = snow_preset
+    if preset_name is not None and preset_name not in _PRESETS[terrain_kind]:
+        choices = ", ".join(_PRESETS[terrain_kind]) or "none (give every parameter)"
+        raise ValueError(
+            f"--preset {preset_name!r} is not a preset of --terrain {terrain_kind}; choose"
+            f" from: {choices}"
+        )
+    if terrain_kind == "wong":
+        # The presets are the thesis's Table 4.1 ratios for D = 0.736 m; the cohesion
+        # follows c = 0.2165 p_w when only p_w is overridden.
+        preset_p_w = THESIS_P_W if preset_name in (None, "thesis") else PLATE_RULE_P_W
+        preset = WongSnow.thesis_fresh_snow(p_w=value("p_w", preset_p_w))
+        _only(terrain_given, WongSnow, options, terrain_kind)
+        snow = WongSnow(
+            p_w=preset.p_w,
+            z_w=value("z_w", preset.z_w),
+            cohesion=value("cohesion", preset.cohesion),
+            tan_phi=value("tan_phi", preset.tan_phi),
+            shear_modulus=value("shear_modulus", preset.shear_modulus),
+        )
+    else:
+        if terrain_kind == "reece":
+            missing = [f for f in _REECE_REQUIRED if f not in terrain_given]
+            if missing:
+                raise ValueError(
+                    "--terrain reece has no preset: give "
+                    + ", ".join("--" + f.replace("_", "-") for f in missing)
+                )
+            base = ReeceSoil(**{f: 1.0 for f in _REECE_REQUIRED})
+        elif terrain_kind == "bekker":
+            base = {
+                "snow-us": BekkerSoil.snow_us, "snow-harrison": BekkerSoil.snow_harrison,
+                "snow-sweden": BekkerSoil.snow_sweden,
+                "thesis-lab-snow": BekkerSoil.thesis_lab_snow,
+            }[preset_name or "snow-us"]()  # fmt: skip
+        else:
+            base = LayeredSnow.ice_layer_example()
+        _only(terrain_given, type(base), options, terrain_kind, _module_leaves(base))
+        snow = _with_leaves(base, {f: np.asarray(v, float) for f, v in terrain_given.items()})
+    return snow
+
+
+def _only(given, cls, options, kind, leaves=None):
+    """Refuse parameter options that are not leaves of the chosen terrain."""
+    import dataclasses
+
+    names = list(leaves) if leaves is not None else [f.name for f in dataclasses.fields(cls)]
+    wrong = [f for f in given if f not in names]
+    if wrong:
+        raise ValueError(
+            ", ".join(options[("terrain", f)] for f in wrong)
+            + f" is not a parameter of --terrain {kind} ({cls.__name__}: "
+            + ", ".join(names) + ")"
+        )
 
 
 def run(args) -> int:
@@ -177,13 +337,14 @@ def run(args) -> int:
             )
         from ._sweep import sweep
 
-        wheel, snow, loads, slips, formats = _build(args)
+        wheel, snow, distribution, loads, slips, formats = _build(args)
         result = sweep(
             wheel,
             snow,
             loads,
             slips,
             shear=args.shear,
+            distribution=distribution,
             out=args.out,
             chunk_size=args.chunk_size,
             grid=not args.list,

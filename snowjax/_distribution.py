@@ -50,7 +50,7 @@ class WongReece(eqx.Module):
 
     def constraints(self, slip) -> list[tuple[str, Array, Array, str]]:
         """Validity per element: (name, value, ok mask, allowed range)."""
-        fm, fr = self.angle_fractions(slip)
+        fm, fr = WongReece.angle_fractions(self, slip)
         return [
             ("distribution.c1 + c2 * slip", fm, (fm >= 0) & (fm < 1), "in [0, 1)"),
             ("distribution.c3", self.c3 + 0.0 * fm, (fr > -1) & (fr <= fm),

@@ -6,10 +6,16 @@ Three fits, all by `optimistix.least_squares` with Levenberg–Marquardt:
   to plate-sinkage data (SI: m, Pa).
 - `fit_tire_coefficients`: the load functions (3.17)–(3.21) of chapter 3 to data shaped
   like the thesis's Table 3.2 (the thesis's units: kN, kN/rad).
-- `fit_wheel`: any subset of the `WongSnow` parameters to measured sinkage and/or drawbar
-  pull / motion resistance versus slip at one or more loads, straight through the
-  vmapped wheel equilibrium `solve_wheel` (eq. 4.14); its gradients come from the
-  implicit function theorem (`optimistix.ImplicitAdjoint`), not from unrolled iterations.
+- `fit_wheel`: any subset of the parameters of any terrain (`WongSnow`, `BekkerSoil`,
+  `ReeceSoil`, `LayeredSnow`) and of the Wong–Reece stress distribution to measured
+  sinkage and/or drawbar pull / motion resistance versus slip at one or more loads,
+  straight through the vmapped wheel equilibrium `solve_wheel` (eq. 4.14); its gradients
+  come from the implicit function theorem (`optimistix.ImplicitAdjoint`), not from
+  unrolled iterations.
+
+A plate fit becomes a terrain the wheel can use: `FitResult.bekker_soil(...)` (Bekker
+law) and `FitResult.wong_snow(...)` (Wong law) add the shear strength the plate test
+does not measure.
 
 Every fit returns a `FitResult`: point estimates, Gauss–Newton standard errors,
 the residuals, and plain-language warnings when a parameter is poorly determined.
@@ -49,23 +55,28 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float
 
-from ._params import RigidWheel, WongSnow
+from ._distribution import WongReece
+from ._params import DEFAULT_SHEAR_MODULUS, BekkerSoil, RigidWheel, Terrain, WongSnow
+from ._sweep import _module_leaves, _parameter_names, _with_leaves
 from ._terrain import bekker_pressure, reece_pressure, wong_pressure
 from ._tire import TireCoefficients, lateral_stiffness, longitudinal_stiffness
 from ._tire import lateral_friction, longitudinal_friction
-from ._wheel import Status, solve_wheel
+from ._wheel import Status, _check_model, solve_wheel
+from ._wheel import _checks as _wheel_checks
 
 __all__ = [
     "FitResult",
     "fit_plate_sinkage",
     "fit_tire_coefficients",
     "fit_wheel",
+    "fit_parameter_names",
     "thesis_plate_test",
     "thesis_tire_table",
     "THESIS_PLATE_DIAMETER",
     "PLATE_LAWS",
     "WHEEL_PARAMETERS",
     "WHEEL_QUANTITIES",
+    "LOG_SPACE_PARAMETERS",
 ]
 
 # Diagnostic thresholds (documented in the module docstring).
@@ -125,6 +136,83 @@ class FitResult:
     num_steps: int = 0
     info: dict[str, Any] = dataclasses.field(default_factory=dict)
 
+    def bekker_soil(
+        self,
+        cohesion: float,
+        tan_phi: float,
+        *,
+        shear_modulus: float = DEFAULT_SHEAR_MODULUS,
+        assume: str = "frictional",
+    ) -> BekkerSoil:
+        """The `BekkerSoil` of a Bekker plate fit (`fit_plate_sinkage(law="bekker")`).
+
+        A plate test measures only the pressure–sinkage law (2.1); the shear strength
+        (2.5) and the Janosi–Hanamoto modulus (2.8) come from a shear test and are given
+        here.
+
+        - **Two or more plate sizes** (k_c, k_φ and n fitted): exact,
+          `BekkerSoil(n, k_c, k_phi, cohesion, tan_phi, shear_modulus=...)`.  On the wheel
+          b is the wheel width, the smaller dimension of its contact patch; the k_c so
+          obtained is in the convention of the `plate_size` values of the fit (the thesis
+          used a circular plate's diameter, Bekker's convention is its radius: a
+          diameter-based k_c is twice the radius-based one).  `assume` is not used.
+        - **One plate size b_p** (only k_eq = k_c / b_p + k_φ and n identifiable): the
+          split of k_eq is unknown, so it must be assumed.  `assume="frictional"`
+          (default): k_c = 0, k_φ = k_eq; `assume="cohesive"`: k_c = k_eq b_p, k_φ = 0.
+          Both reproduce the plate law exactly for a wheel of width b = b_p (and then give
+          the same wheel); for another width the true modulus k_c / b + k_φ lies between
+          the two (when k_c, k_φ >= 0): the frictional choice keeps k_eq whatever the
+          width, the cohesive one scales it by b_p / b.  Test two plate sizes to know.
+
+        **Arguments:**
+
+        - `cohesion`: c [Pa] (>= 0).
+        - `tan_phi`: tan φ [-] (>= 0).
+        - `shear_modulus`: K [m] (> 0; default `DEFAULT_SHEAR_MODULUS`, 10 mm).
+        - `assume`: `"frictional"` or `"cohesive"` (one plate size only, see above).
+
+        **Returns:** a `BekkerSoil` with scalar leaves, ready for `solve_wheel`.
+
+        **Raises:** `ValueError` if this is not a Bekker plate fit or an argument is out
+        of range.
+        """
+        if self.info.get("law") != "bekker":
+            raise ValueError(
+                "bekker_soil() needs the result of fit_plate_sinkage(law='bekker'); this is "
+                f"{self.info.get('title', 'another fit')!r}"
+            )
+        strength = _shear_strength(cohesion, tan_phi, shear_modulus)
+        n = self.params["n"]
+        if "k_c" in self.params:  # two or more plate sizes: k_c and k_phi identified
+            k_c, k_phi = self.params["k_c"], self.params["k_phi"]
+        else:
+            if assume not in ("frictional", "cohesive"):
+                raise ValueError(f"assume must be 'frictional' or 'cohesive', got {assume!r}")
+            k_eq = self.params["k_eq"]
+            plate = float(self.info["plate_sizes"][0])
+            k_c, k_phi = (0.0, k_eq) if assume == "frictional" else (k_eq * plate, 0.0)
+        return BekkerSoil(
+            n=n, k_c=k_c, k_phi=k_phi, cohesion=strength[0], tan_phi=strength[1],
+            shear_modulus=strength[2],
+        )  # fmt: skip
+
+    def wong_snow(
+        self, cohesion: float, tan_phi: float, *, shear_modulus: float = DEFAULT_SHEAR_MODULUS
+    ) -> WongSnow:
+        """The `WongSnow` of a Wong plate fit (`fit_plate_sinkage(law="wong")`).
+
+        Wong's law (2.3) does not depend on the plate size, so p_w and z_w carry over to
+        the wheel as they are.  **Arguments:** `cohesion` c [Pa] (>= 0), `tan_phi` [-]
+        (>= 0), `shear_modulus` K [m] (> 0; default 10 mm).  **Returns:** `WongSnow`.
+        """
+        if self.info.get("law") != "wong":
+            raise ValueError(
+                "wong_snow() needs the result of fit_plate_sinkage(law='wong'); this is "
+                f"{self.info.get('title', 'another fit')!r}"
+            )
+        c, t, k = _shear_strength(cohesion, tan_phi, shear_modulus)
+        return WongSnow(self.params["p_w"], self.params["z_w"], c, t, k)
+
     def table(self) -> str:
         """A readable table of the parameters, standard errors and warnings."""
         lines = [str(self.info.get("title", "fit"))]
@@ -172,6 +260,20 @@ class FitResult:
             if key in self.info:
                 out[key] = self.info[key]
         return out
+
+
+def _shear_strength(cohesion, tan_phi, shear_modulus) -> tuple[float, float, float]:
+    values = []
+    for name, v, ok, allowed in (
+        ("cohesion", cohesion, lambda x: x >= 0, ">= 0 Pa"),
+        ("tan_phi", tan_phi, lambda x: x >= 0, ">= 0"),
+        ("shear_modulus", shear_modulus, lambda x: x > 0, "> 0 m"),
+    ):
+        x = float(v)
+        if not (math.isfinite(x) and ok(x)):
+            raise ValueError(f"{name} must be finite and {allowed}, got {v!r}")
+        values.append(x)
+    return tuple(values)
 
 
 # ---------------------------------------------------------------------------------------
@@ -550,7 +652,10 @@ def fit_plate_sinkage(
     - `cohesion`, `unit_weight`: optional c [Pa] and γ_s [N/m³] for Reece's k'_c, k'_φ.
     - `max_steps`: Levenberg–Marquardt step limit.
 
-    **Returns:** a `FitResult` (residuals in Pa, SSE in Pa²).
+    **Returns:** a `FitResult` (residuals in Pa, SSE in Pa²).  For the wheel:
+    `result.bekker_soil(cohesion, tan_phi, shear_modulus=...)` (Bekker; with one plate
+    size the split of k_eq is an assumption, see `FitResult.bekker_soil`) and
+    `result.wong_snow(...)` (Wong) return the terrain `solve_wheel` takes.
 
     **Raises:** `ValueError` for an unknown law, unequal lengths, non-finite values,
     negative sinkage, non-positive plate sizes, or too few points (more than the number
@@ -1042,6 +1147,59 @@ def _block_diag(blocks):
 # into a region where the model cannot be evaluated.
 _FAILED_RESIDUAL = 10.0
 
+# Unit of every known parameter leaf, by field name (the last component of its path).
+_PARAMETER_UNITS = {
+    **_WHEEL_UNITS,
+    "n": "-",
+    "k_c": "N/m^(n+1)",
+    "k_phi": "N/m^(n+2)",
+    "k_c_prime": "-",
+    "k_phi_prime": "-",
+    "unit_weight": "N/m^3",
+    "ice_failure_pressure": "Pa",
+    "c1": "-",
+    "c2": "-",
+    "c3": "-",
+}
+# Leaves that are never negative are fitted in log space (u = ln theta); all others
+# (k_c, k_phi, k_c_prime, k_phi_prime, c1, c2, c3, and any leaf of a user-defined
+# terrain) as theta = start + scale u.
+LOG_SPACE_PARAMETERS = (
+    "p_w", "z_w", "cohesion", "tan_phi", "shear_modulus", "n", "unit_weight",
+    "ice_failure_pressure",
+)  # fmt: skip
+# Scale of a linearly fitted parameter whose start value is 0 (otherwise |start|).
+_LINEAR_SCALES = {
+    "k_c": 1e3,  # N/m^(n+1)
+    "k_phi": 1e5,  # N/m^(n+2)
+    "k_c_prime": 1.0,
+    "k_phi_prime": 1.0,
+    "c1": 0.1,
+    "c2": 0.1,
+    "c3": 0.1,
+}
+
+
+def _field(path: str) -> str:
+    return path.rsplit(".", 1)[-1]
+
+
+def fit_parameter_names(terrain, distribution=None) -> tuple[str, ...]:
+    """The names `fit_wheel` accepts in `fit=` for this terrain and distribution.
+
+    A leaf is named by its field path: the terrain's fields (`p_w`, `k_phi`, `n`, ...),
+    nested ones dotted (`top.p_w`, `bottom.z_w` for `LayeredSnow`), and the
+    distribution's (`c1`, `c2`, `c3` for `WongReece`).  A name that both hold is
+    written `terrain.<path>` / `distribution.<path>`; these prefixed forms are accepted
+    for every leaf.
+
+    **Arguments:** `terrain`: a `snowjax.Terrain`; `distribution`: `None` or a
+    `snowjax.WongReece`.
+
+    **Returns:** the canonical names, terrain first, in field order.
+    """
+    return tuple(_parameter_names(terrain, distribution))
+
 
 class _WheelResidual(eqx.Module):
     """Scaled residuals (model − data) / scale of the chosen quantities, quantity-major."""
@@ -1051,21 +1209,35 @@ class _WheelResidual(eqx.Module):
     shear: str = eqx.field(static=True)
     nodes_per_panel: Any = eqx.field(static=True)
     solve_max_steps: int = eqx.field(static=True)
+    # (owner, field path) of each fitted variable; owner "terrain" or "distribution".
+    targets: tuple = eqx.field(static=True, default=())
+    # "log" (theta = exp(u)) or "linear" (theta = offset + step u) per fitted variable.
+    transforms: tuple = eqx.field(static=True, default=())
 
     def __call__(self, u, args):
-        wheel, snow, load, slip, data, scale = args
-        values = _finite_cotangent(jnp.exp(u))  # log-space fit: every parameter stays > 0
-        snow = eqx.tree_at(
-            lambda s: tuple(getattr(s, nm) for nm in self.names),
-            snow,
-            tuple(values[i] for i in range(len(self.names))),
-        )
+        wheel, snow, distribution, load, slip, data, scale, offset, step = args
+        if all(t == "log" for t in self.transforms):
+            values = _finite_cotangent(jnp.exp(u))  # every parameter stays > 0
+        else:
+            values = _finite_cotangent(
+                jnp.stack([
+                    jnp.exp(u[i]) if t == "log" else offset[i] + step[i] * u[i]
+                    for i, t in enumerate(self.transforms)
+                ])
+            )  # fmt: skip
+        new = {"terrain": {}, "distribution": {}}
+        for i, (owner, path) in enumerate(self.targets):
+            new[owner][path] = values[i]
+        snow = _with_leaves(snow, new["terrain"])
+        if distribution is not None:
+            distribution = _with_leaves(distribution, new["distribution"])
         st = solve_wheel(
             wheel,
             snow,
             load,
             slip,
             self.shear,
+            distribution=distribution,
             nodes_per_panel=self.nodes_per_panel,
             max_steps=self.solve_max_steps,
         )
@@ -1108,9 +1280,37 @@ def _masked_residual(pred, data, scale, status):
     return jnp.where(ok, (safe_pred - data) / scale, _FAILED_RESIDUAL)
 
 
+def _resolve_fit_names(fit, terrain, distribution):
+    """User names -> (canonical names, (owner, path) targets), or a ValueError."""
+    table = _parameter_names(terrain, distribution)
+    aliases = dict((name, name) for name in table)
+    for name, (owner, path) in table.items():
+        aliases.setdefault(f"{owner}.{path}", name)
+    if isinstance(terrain, WongSnow) and distribution is None:
+        allowed_txt = f"{WHEEL_PARAMETERS}"
+    else:
+        allowed_txt = (
+            f"{tuple(table)} (for {type(terrain).__name__}"
+            + ("" if distribution is None else f" with {type(distribution).__name__}")
+            + "; the prefixed forms 'terrain.<name>' / 'distribution.<name>' work too)"
+        )
+    if isinstance(fit, str):
+        fit = (fit,)
+    given = tuple(fit)
+    if not given:
+        raise ValueError(f"fit must name at least one of {allowed_txt}")
+    unknown = [nm for nm in given if nm not in aliases]
+    if unknown:
+        raise ValueError(f"unknown parameter name(s) {unknown} in fit; allowed: {allowed_txt}")
+    names = tuple(aliases[nm] for nm in given)
+    if len(set(names)) != len(names):
+        raise ValueError(f"fit names a parameter twice: {list(given)}")
+    return names, tuple(table[nm] for nm in names)
+
+
 def fit_wheel(
     wheel: RigidWheel,
-    snow: WongSnow,
+    snow: Terrain,
     load: Float[ArrayLike, " m"],
     slip: Float[ArrayLike, " m"],
     *,
@@ -1123,18 +1323,43 @@ def fit_wheel(
     max_steps: int = 100,
     nodes_per_panel: int | None = None,
     solve_max_steps: int = 64,
+    distribution: WongReece | None = None,
 ) -> FitResult:
-    """Fit snow parameters to wheel measurements through the equilibrium (4.14).
+    """Fit terrain (and stress-distribution) parameters to wheel measurements through
+    the equilibrium (4.14).
 
     For each data point (load F_z, slip i) the model is `snowjax.solve_wheel`: the entry
     angle with W(θ0) = F_z (4.14), then sinkage (4.15), motion resistance (4.16) and
-    drawbar pull (2.10).  All points are solved in one vmapped call per residual
-    evaluation, and `optimistix.least_squares` (Levenberg–Marquardt) differentiates
-    straight through that root find with the implicit function theorem.
+    drawbar pull (2.10), on any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+    `LayeredSnow`) with the front-region stresses (`distribution=None`) or Wong & Reece's
+    distribution.  All points are solved in one vmapped call per residual evaluation,
+    and `optimistix.least_squares` (Levenberg–Marquardt) differentiates straight through
+    that root find with the implicit function theorem.
 
-    **Fitted variables.**  Each parameter named in `fit` is fitted as u = ln θ (so it
-    stays positive); the others keep their value in `snow`, which also supplies the start
-    values.  Standard errors come back by the delta method, se(θ) = θ se(u).
+    **Parameter names** (`fit=`): every array leaf of the terrain and of the
+    distribution, by field path — `WongSnow`: `p_w`, `z_w`, `cohesion`, `tan_phi`,
+    `shear_modulus`; `BekkerSoil`: `n`, `k_c`, `k_phi`, `cohesion`, `tan_phi`,
+    `shear_modulus`; `ReeceSoil`: `n`, `k_c_prime`, `k_phi_prime`, `unit_weight`,
+    `cohesion`, `tan_phi`, `shear_modulus`; `LayeredSnow`: `top.p_w`, ...,
+    `bottom.shear_modulus` (dotted: the nested layers) and `ice_failure_pressure`;
+    `WongReece`: `c1`, `c2`, `c3`.  `distribution.c1` / `terrain.k_phi` (prefixed) are
+    accepted too, and are the only form of a name both objects hold.
+    `fit_parameter_names(terrain, distribution)` lists them; an unknown name raises a
+    `ValueError` that lists them.  `FitResult.params` uses the unprefixed names.
+
+    **Fitted variables.**  Parameters that are never negative — `p_w`, `z_w`,
+    `cohesion`, `tan_phi`, `shear_modulus`, `n`, `unit_weight`, `ice_failure_pressure`
+    (`LOG_SPACE_PARAMETERS`) — are fitted as u = ln θ (so they stay positive; their
+    start value must be > 0).  The moduli that may be zero or negative (`k_c`, `k_phi`,
+    `k_c_prime`, `k_phi_prime`: Bekker's k_c is negative for some soils) and the
+    distribution's `c1`, `c2`, `c3` (c3 < 0 puts the exit behind the axle) are fitted
+    linearly, θ = θ_start + s u with s = |θ_start|, or, for a zero start value, a
+    typical magnitude (k_c 1e3 N/m^(n+1), k_phi 1e5 N/m^(n+2), k'_c and k'_φ 1,
+    c1..c3 0.1).  The other parameters keep their values in `snow` / `distribution`,
+    which also supply the start values.  Standard errors come back by the delta
+    method, se(θ) = θ se(u) (log) or s se(u) (linear).  Iterates where the model is
+    invalid (e.g. c1 + c2 i outside [0, 1)) get the failed-point residual below, so
+    the optimiser steps back from them.
 
     **Residuals.**  For each measured quantity q, r = (model − data) / scale_q, stacked
     quantity-major (all sinkages, then all drawbar pulls, then all motion resistances).
@@ -1156,47 +1381,51 @@ def fit_wheel(
     **Arguments:**
 
     - `wheel`: `RigidWheel` (scalar diameter [m], width [m]).
-    - `snow`: `WongSnow` with scalar leaves: start values of the fitted parameters and
-      fixed values of the rest (p_w [Pa], z_w [m], cohesion [Pa], tan_phi [-],
-      shear_modulus K [m]); fitted ones must be > 0.
+    - `snow`: the terrain, any `snowjax.Terrain` with scalar leaves (SI units: Pa, m,
+      N/m^(n+1), N/m^(n+2), N/m^3; see each class): start values of the fitted
+      parameters and fixed values of the rest.  Every value must be valid for
+      `solve_wheel`.
     - `load`: F_z [N] (> 0), one per data point (several loads allowed).
     - `slip`: driving slip i [-] in [-1, 1], same length.
     - `sinkage` [m], `drawbar_pull` [N], `motion_resistance` [N]: measured values, same
       length; at least one of them.
-    - `fit`: names of the `WongSnow` fields to fit (any non-empty subset of
-      `WHEEL_PARAMETERS`).
-    - `shear`: `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`).
+    - `fit`: names of the parameters to fit (see above; a non-empty subset of
+      `fit_parameter_names(snow, distribution)`).
+    - `shear`: `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`;
+      `"simplified"` only for `WongSnow` without a distribution).
     - `scale`: optional residual scale per quantity [m or N] (scalar or per point), see
       above.
     - `max_steps`: Levenberg–Marquardt step limit; `nodes_per_panel`, `solve_max_steps`:
       passed to `solve_wheel` (its quadrature nodes and Newton iteration limit).
+    - `distribution`: `None` (the thesis's front-region stresses) or a
+      `snowjax.WongReece` (c1, c2, c3 [-], scalar leaves) whose leaves can be fitted too.
 
-    **Returns:** a `FitResult`; `info` has `snow` (the fitted `WongSnow`), `predictions`
-    (dict of model values at the optimum), `status`, `scale`.
+    **Returns:** a `FitResult`; `info` has `snow` and `terrain` (the fitted terrain, of
+    the type of `snow`), `distribution` (the fitted distribution or `None`),
+    `transforms` (name -> `"log"` / `"linear"`), `predictions` (dict of model values at
+    the optimum), `status`, `scale`.
 
     Use float64 (`jax.config.update("jax_enable_x64", True)`): the standard errors need
     derivatives accurate well beyond float32.  Each new combination of data length,
-    fitted names, measured quantities and shear model compiles once (about 10 s on a
-    CPU); later fits of the same kind take a fraction of a second.
+    fitted names, measured quantities, terrain / distribution type and shear model
+    compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
+    a second.
     """
     if not isinstance(wheel, RigidWheel):
         raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
-    if not isinstance(snow, WongSnow):
-        raise TypeError(f"snow must be a snowjax.WongSnow, got {type(snow).__name__}")
-    if isinstance(fit, str):
-        fit = (fit,)
-    names = tuple(fit)
-    if not names:
-        raise ValueError(f"fit must name at least one of {WHEEL_PARAMETERS}")
-    unknown = [nm for nm in names if nm not in WHEEL_PARAMETERS]
-    if unknown:
-        raise ValueError(
-            f"unknown parameter name(s) {unknown} in fit; allowed: {WHEEL_PARAMETERS}"
+    if not isinstance(snow, Terrain):
+        raise TypeError(
+            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
+            f"got {type(snow).__name__}"
         )
-    if len(set(names)) != len(names):
-        raise ValueError(f"fit names a parameter twice: {list(names)}")
+    if distribution is not None and not isinstance(distribution, WongReece):
+        raise TypeError(
+            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+        )
+    names, targets = _resolve_fit_names(fit, snow, distribution)
     if shear not in ("classic", "simplified", "none"):
         raise ValueError(f"shear must be 'classic', 'simplified' or 'none', got {shear!r}")
+    _check_model(wheel, snow, distribution, shear)
 
     ld = _vector("load", load)
     sl = _vector("slip", slip)
@@ -1238,45 +1467,105 @@ def fit_wheel(
             f"measured values; got {m_total}"
         )
 
-    leaves = {}
-    for nm in WHEEL_PARAMETERS:
-        v = np.asarray(getattr(snow, nm), dtype=float)
-        if v.size != 1:
-            raise ValueError(f"snow.{nm} must be a scalar for fit_wheel, got shape {v.shape}")
-        v = float(v.reshape(()))
-        if not math.isfinite(v) or v < 0 or (nm in names and v <= 0):
-            raise ValueError(
-                f"snow.{nm} must be finite and {'> 0' if nm in names else '>= 0'}, got {v!r}"
-            )
-        leaves[nm] = v
+    # Start values: scalar, finite; log-space ones > 0 when fitted (>= 0 otherwise).
+    fitted_paths = {owner: {p for o, p in targets if o == owner}
+                    for owner in ("terrain", "distribution")}  # fmt: skip
+    start: dict[str, dict[str, float]] = {"terrain": {}, "distribution": {}}
+    objects = {"terrain": snow, "distribution": distribution}
+    labels = {"terrain": "snow", "distribution": "distribution"}
+    for owner, obj in objects.items():
+        if obj is None:
+            continue
+        for path, value in _module_leaves(obj).items():
+            v = np.asarray(value, dtype=float)
+            if v.size != 1:
+                raise ValueError(
+                    f"{labels[owner]}.{path} must be a scalar for fit_wheel, got shape {v.shape}"
+                )
+            v = float(v.reshape(()))
+            fitted = path in fitted_paths[owner]
+            if _field(path) in LOG_SPACE_PARAMETERS:
+                if not math.isfinite(v) or v < 0 or (fitted and v <= 0):
+                    raise ValueError(
+                        f"{labels[owner]}.{path} must be finite and "
+                        f"{'> 0' if fitted else '>= 0'}, got {v!r}"
+                        + (" (it is fitted in log space)" if fitted and v == 0 else "")
+                    )
+            elif not math.isfinite(v):
+                raise ValueError(f"{labels[owner]}.{path} must be finite, got {v!r}")
+            start[owner][path] = v
     for nm in ("diameter", "width"):
         v = np.asarray(getattr(wheel, nm), dtype=float)
         if v.size != 1 or not (np.isfinite(v).all() and (v > 0).all()):
             raise ValueError(f"wheel.{nm} must be a finite scalar > 0, got {v!r}")
+    # The start values must be valid for solve_wheel at every data point.
+    to_np = lambda x: np.asarray(x, dtype=float)  # noqa: E731
+    with np.errstate(invalid="ignore", over="ignore"):
+        rules = _wheel_checks(
+            jax.tree_util.tree_map(to_np, wheel), jax.tree_util.tree_map(to_np, snow),
+            None if distribution is None else jax.tree_util.tree_map(to_np, distribution),
+            ld, sl, shear,
+        )  # fmt: skip
+    for rule, value, ok, allowed in rules:
+        value = np.asarray(value, dtype=float)
+        good = np.isfinite(value) & np.asarray(ok)
+        if not good.all():
+            shape = np.broadcast_shapes(good.shape, value.shape)
+            first = np.broadcast_to(value, shape)[~np.broadcast_to(good, shape)].flat[0]
+            raise ValueError(
+                f"fit_wheel: the start values are not valid for solve_wheel: {rule} must be "
+                f"finite and {allowed}; got {float(first)!r}"
+            )
 
     dtype = jnp.result_type(float)
     wheel_a = RigidWheel(
         jnp.asarray(float(wheel.diameter), dtype), jnp.asarray(float(wheel.width), dtype)
     )
-    snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in leaves.items()})
+    if isinstance(snow, WongSnow):
+        snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
+    else:
+        snow_a = _with_leaves(
+            snow, {p: jnp.asarray(v, dtype) for p, v in start["terrain"].items()}
+        )
+    dist_a = None
+    if distribution is not None:
+        dist_a = _with_leaves(
+            distribution, {p: jnp.asarray(v, dtype) for p, v in start["distribution"].items()}
+        )
+    transforms = tuple("log" if _field(p) in LOG_SPACE_PARAMETERS else "linear"
+                       for _, p in targets)  # fmt: skip
+    theta0 = np.array([start[o][p] for o, p in targets])
+    steps = np.array([
+        abs(t0) if t0 != 0 else _LINEAR_SCALES.get(_field(p), 1.0)
+        for t0, (_, p) in zip(theta0, targets)
+    ])  # fmt: skip
+    offsets = np.where(np.array([t == "linear" for t in transforms]), theta0, 0.0)
+    steps = np.where(np.array([t == "linear" for t in transforms]), steps, 1.0)
     residual = _WheelResidual(
         names=names,
         quantities=quantities,
         shear=shear,
         nodes_per_panel=None if nodes_per_panel is None else int(nodes_per_panel),
         solve_max_steps=int(solve_max_steps),
+        targets=targets,
+        transforms=transforms,
     )
-    u0 = np.log([leaves[nm] for nm in names])
+    u0 = np.array([
+        math.log(t0) if t == "log" else 0.0 for t0, t in zip(theta0, transforms)
+    ])  # fmt: skip
     args = (
         wheel_a,
         snow_a,
+        dist_a,
         jnp.asarray(ld, dtype),
         jnp.asarray(sl, dtype),
         jnp.asarray(data, dtype),
         jnp.asarray(scales, dtype),
+        jnp.asarray(offsets, dtype),
+        jnp.asarray(steps, dtype),
     )
     u0 = jnp.asarray(u0, dtype)
-    u, r, jac, (pred, status), ok, steps = _run(residual, u0, args, max_steps, 1e-10)
+    u, r, jac, (pred, status), ok, n_steps = _run(residual, u0, args, max_steps, 1e-10)
 
     warnings: list[str] = []
     if dtype != jnp.float64:
@@ -1284,7 +1573,7 @@ def fit_wheel(
             "computed in float32: enable float64 (jax_enable_x64) for reliable standard errors."
         )
     if not ok:
-        warnings.append(_not_converged(steps, max_steps))
+        warnings.append(_not_converged(n_steps, max_steps))
     status = np.asarray(status).astype(int)
     good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
     for code in (Status.NOT_CONVERGED, Status.ENTRY_ANGLE_LIMIT, Status.INVALID_INPUT):
@@ -1305,36 +1594,59 @@ def fit_wheel(
     rows = np.tile(good, len(quantities))
     r_used = np.where(rows, r, 0.0)
     unc = _gauss_newton_covariance(jac[rows], r[rows])
-    theta = np.exp(u)
+    is_log = np.array([t == "log" for t in transforms])
+    theta = np.where(is_log, np.exp(np.where(is_log, u, 0.0)), offsets + steps * u)
     diameter = float(wheel.diameter)
-    if "z_w" in names and theta[names.index("z_w")] >= diameter:
-        warnings.append(
-            f"z_w = {theta[names.index('z_w')]:.4g} m is not below the wheel diameter "
-            f"{diameter:g} m: the data do not reach the base, and the model gives no "
-            "derivative with respect to z_w there (fix z_w or add data near the base)."
-        )
-    cov, se, corr = _propagate(unc, np.diag(theta))
+    for k, nm in enumerate(names):
+        if _field(targets[k][1]) == "z_w" and theta[k] >= diameter:
+            warnings.append(
+                f"{nm} = {theta[k]:.4g} m is not below the wheel diameter "
+                f"{diameter:g} m: the data do not reach the base, and the model gives no "
+                f"derivative with respect to {nm} there (fix {nm} or add data near the base)."
+            )
+    cov, se, corr = _propagate(unc, np.diag(np.where(is_log, theta, steps)))
     warnings += _diagnose(list(names), list(theta), se, corr, unc, list(names))
 
-    fitted_snow = WongSnow(**{**leaves, **{nm: float(v) for nm, v in zip(names, theta)}})
+    final = {o: dict(start[o]) for o in start}
+    for (owner, path), v in zip(targets, theta):
+        final[owner][path] = float(v)
+    if isinstance(snow, WongSnow):
+        fitted_snow = WongSnow(**final["terrain"])
+    else:
+        fitted_snow = _with_leaves(
+            snow, {p: jnp.asarray(v, dtype) for p, v in final["terrain"].items()}
+        )
+    fitted_dist = None
+    if distribution is not None:
+        fitted_dist = _with_leaves(
+            distribution, {p: jnp.asarray(v, dtype) for p, v in final["distribution"].items()}
+        )
     q_txt = ", ".join(quantities)
+    model_txt = ""
+    if not (isinstance(snow, WongSnow) and distribution is None):
+        model_txt = f", {type(snow).__name__}" + (
+            "" if distribution is None else f" with {type(distribution).__name__}"
+        )
     return FitResult(
         params={nm: float(v) for nm, v in zip(names, theta)},
         stderr={nm: float(s) for nm, s in zip(names, se)},
         sse=float(np.sum(r_used**2)),
         residuals=r_used,
         warnings=warnings,
-        units={nm: _WHEEL_UNITS[nm] for nm in names},
+        units={nm: _PARAMETER_UNITS.get(_field(p), "") for nm, (_, p) in zip(names, targets)},
         covariance=cov,
         correlation=corr,
         condition_number=unc.cond,
         dof=unc.dof,
         success=ok,
-        num_steps=steps,
+        num_steps=n_steps,
         info={
             "title": f"Wheel calibration through the equilibrium (4.14): {m} points "
-            f"({q_txt}), shear={shear!r}",
+            f"({q_txt}), shear={shear!r}{model_txt}",
             "snow": fitted_snow,
+            "terrain": fitted_snow,
+            "distribution": fitted_dist,
+            "transforms": dict(zip(names, transforms)),
             "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},
             "status": status,
             "scale": {q: scales[k].copy() for k, q in enumerate(quantities)},

@@ -118,6 +118,10 @@ class Terrain(eqx.Module):
             ("shear_modulus", self.shear_modulus, self.shear_modulus > 0, "> 0 m"),  # type: ignore[attr-defined]
         ]
 
+    def wheel_constraints(self, width) -> list[tuple[str, Array, Array, str]]:
+        """Rules that involve the wheel width b [m] (e.g. a positive Bekker modulus)."""
+        return []
+
     @classmethod
     @abc.abstractmethod
     def reference(cls) -> "Terrain":
@@ -288,8 +292,12 @@ class BekkerSoil(Terrain):
             ("n", self.n, self.n > 0, "> 0"),
             ("k_c", self.k_c, self.k_c * 0 == 0, "finite N/m^(n+1)"),
             ("k_phi", self.k_phi, self.k_phi * 0 == 0, "finite N/m^(n+2)"),
-            *super().constraints(shear),
+            *Terrain.constraints(self, shear),
         ]
+
+    def wheel_constraints(self, width):
+        modulus = self.k_c / width + self.k_phi
+        return [("k_c / b + k_phi", modulus, modulus > 0, "> 0 at the wheel width b")]
 
     @classmethod
     def reference(cls) -> "BekkerSoil":
@@ -383,8 +391,12 @@ class ReeceSoil(Terrain):
             ("k_c_prime", self.k_c_prime, self.k_c_prime * 0 == 0, "finite"),
             ("k_phi_prime", self.k_phi_prime, self.k_phi_prime * 0 == 0, "finite"),
             ("unit_weight", self.unit_weight, self.unit_weight >= 0, ">= 0 N/m^3"),
-            *super().constraints(shear),
+            *Terrain.constraints(self, shear),
         ]
+
+    def wheel_constraints(self, width):
+        modulus = self.cohesion * self.k_c_prime + self.unit_weight * width * self.k_phi_prime
+        return [("c k'_c + gamma_s b k'_phi", modulus, modulus > 0, "> 0 at the wheel width b")]
 
     @classmethod
     def reference(cls) -> "ReeceSoil":
@@ -466,7 +478,7 @@ class LayeredSnow(Terrain):
         rules = [
             (f"{part}.{name}", value, ok, allowed)
             for part, layer in (("top", self.top), ("bottom", self.bottom))
-            for name, value, ok, allowed in layer.constraints(shear)
+            for name, value, ok, allowed in WongSnow.constraints(layer, shear)
         ]
         rules.append(
             ("bottom.z_w", self.bottom.z_w, self.bottom.z_w > self.top.z_w, "> top.z_w (m)")

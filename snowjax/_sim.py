@@ -75,8 +75,9 @@ import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from ._contact import ShearModel, _check_shear
-from ._params import RigidWheel, WongSnow, _as_float
-from ._wheel import solve_wheel
+from ._distribution import WongReece
+from ._params import RigidWheel, Terrain, _as_float
+from ._wheel import _check_model, solve_wheel
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -165,7 +166,9 @@ class WheelForces(eqx.Module):
     status: Int[Array, "..."]
 
 
-def _wheel_forces(speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess, n, steps):
+def _wheel_forces(
+    speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess, n, steps, distribution=None
+):
     slip, direction, scale = _kinematics(speed, wheel_speed, wheel.diameter / 2, speed_eps)
     st = solve_wheel(
         wheel,
@@ -173,6 +176,7 @@ def _wheel_forces(speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess
         load,
         slip,
         shear,
+        distribution=distribution,
         nodes_per_panel=n,
         max_steps=steps,
         initial_entry_angle=guess,
@@ -203,13 +207,14 @@ def wheel_forces(
     wheel_speed: Float[ArrayLike, "..."],
     load: Float[ArrayLike, "..."],
     wheel: RigidWheel,
-    snow: WongSnow,
+    snow: Terrain,
     shear: ShearModel = "classic",
     *,
     speed_eps: float = DEFAULT_SPEED_EPS,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
+    distribution: WongReece | None = None,
 ) -> WheelForces:
     """Snow forces on a rigid wheel from its kinematic state: the force function to call
     inside any simulator step (MJX, Brax, your own integrator).
@@ -227,12 +232,16 @@ def wheel_forces(
     - `speed`: v, forward speed of the axle over the snow [m/s].
     - `wheel_speed`: omega, spin of the wheel [rad/s] (positive rolls forwards).
     - `load`: vertical load F_z on the wheel [N], > 0.
-    - `wheel`, `snow`: `RigidWheel` (D, b [m]) and `WongSnow` (SI) parameter sets.
-    - `shear`: shear model of `solve_wheel` (`"classic"`, `"simplified"`, `"none"`).
+    - `wheel`, `snow`: `RigidWheel` (D, b [m]) and the terrain, any `snowjax.Terrain`
+      (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets).
+    - `shear`: shear model of `solve_wheel` (`"classic"`, `"simplified"`, `"none"`;
+      `"simplified"` only for `WongSnow` without a distribution).
     - `speed_eps`: regularisation speed [m/s], > 0.
     - `initial_entry_angle`: warm start theta0 [rad] for `solve_wheel`, e.g. the
       `entry_angle` of the previous simulator step; changes only the iteration count.
     - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
+    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+      (c1, c2, c3 [-]), passed to `solve_wheel`.
 
     **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage
     [m], entry angle [rad], slip [-], status).
@@ -257,6 +266,7 @@ def wheel_forces(
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
     _check_shear(shear)
+    _check_model(wheel, snow, distribution, shear)
     _check_concrete("speed", speed, lambda x: np.ones_like(x, bool), "a number [m/s]")
     _check_concrete(
         "wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]"
@@ -276,6 +286,7 @@ def wheel_forces(
         initial_entry_angle,
         nodes_per_panel,
         int(max_steps),
+        distribution,
     )
 
 
@@ -391,12 +402,13 @@ class _VehicleTerm(diffrax.AbstractTerm):
     """
 
     vehicle: Vehicle
-    snow: WongSnow
+    snow: Terrain
     torque: Any
     shear: str = eqx.field(static=True)
     speed_eps: float = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
+    distribution: WongReece | None = None
 
     def forces(self, y, hint):
         """Wheel forces at state(s) y [..., n + 2] (warm start `hint`, or None)."""
@@ -411,6 +423,7 @@ class _VehicleTerm(diffrax.AbstractTerm):
             hint,
             self.nodes_per_panel,
             self.max_wheel_steps,
+            self.distribution,
         )
 
     def vf(self, t, y, args):
@@ -670,7 +683,7 @@ def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
 
 def simulate_longitudinal(
     vehicle: Vehicle,
-    snow: WongSnow,
+    snow: Terrain,
     torque: Float[ArrayLike, "..."] | TorqueProfile | Callable,
     t1: float,
     dt: float,
@@ -683,6 +696,7 @@ def simulate_longitudinal(
     adjoint: diffrax.AbstractAdjoint | None = None,
     nodes_per_panel: int | None = None,
     newton_steps: int = 100,
+    distribution: WongReece | None = None,
 ) -> Trajectory:
     """Simulate a vehicle driving straight on snow; differentiable end to end.
 
@@ -692,7 +706,8 @@ def simulate_longitudinal(
     steps of `dt` inside `diffrax.diffeqsolve`; a step whose implicit equation is not
     solved (rare: the first steps from rest) is retried as smaller steps by the
     step-size controller, so the saved times are always the grid `k dt`.  Gradients
-    w.r.t. every array leaf of `vehicle`, `snow` and `torque` (and the initial state)
+    w.r.t. every array leaf of `vehicle`, `snow`, `distribution` and `torque` (and the
+    initial state)
     are exact derivatives of the discrete trajectory: `jax.grad` uses `adjoint`
     (default `diffrax.RecursiveCheckpointAdjoint()`); for `jax.jvp`/`jax.jacfwd` pass
     `adjoint=diffrax.ForwardMode()`, which compiles and runs much faster for a few
@@ -703,7 +718,8 @@ def simulate_longitudinal(
     **Arguments:**
 
     - `vehicle`: `Vehicle` (mass [kg], wheel inertia [kg m^2], wheel, number of wheels).
-    - `snow`: `WongSnow` parameter set (SI); scalar leaves.
+    - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`,
+      `ReeceSoil`, `LayeredSnow`; SI); scalar leaves.
     - `torque`: applied torque per wheel T [N m], positive driving forwards: a number
       or an array of shape (n,) (constant), a `TorqueProfile` (piecewise linear in t),
       or a callable `torque(t, speed, wheel_speed) -> () or (n,)` (a controller; make it
@@ -720,6 +736,8 @@ def simulate_longitudinal(
     - `adjoint`: a `diffrax.AbstractAdjoint`.
     - `nodes_per_panel`: quadrature nodes per panel of `solve_wheel` (default 12).
     - `newton_steps`: iteration limit of each implicit step's Newton solve.
+    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+      (c1, c2, c3 [-]; scalar leaves), passed to `solve_wheel`.
 
     **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.
 
@@ -745,8 +763,12 @@ def simulate_longitudinal(
     _check_shear(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
-    if not isinstance(snow, WongSnow):
-        raise TypeError(f"snow must be a snowjax.WongSnow, got {type(snow).__name__}")
+    if not isinstance(snow, Terrain):
+        raise TypeError(
+            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
+            f"got {type(snow).__name__}"
+        )
+    _check_model(vehicle.wheel, snow, distribution, shear)
     for name, value in (("t1", t1), ("dt", dt), ("speed_eps", speed_eps)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be finite and > 0; got {value!r}")
@@ -766,7 +788,9 @@ def simulate_longitudinal(
         raise ValueError(f"vehicle.num_wheels must be a positive int; got {n!r}")
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, n)
-    dtype = jnp.result_type(vehicle.mass, snow.p_w, float)
+    dtype = jnp.result_type(
+        vehicle.mass, *jax.tree_util.tree_leaves((snow, distribution)), float
+    )
     speed0 = jnp.asarray(initial_speed, dtype)
     if initial_wheel_speed is None:
         initial_wheel_speed = speed0 / (vehicle.wheel.diameter / 2)
@@ -788,6 +812,7 @@ def simulate_longitudinal(
         speed_eps=float(speed_eps),
         nodes_per_panel=nodes_per_panel,
         max_wheel_steps=64,
+        distribution=distribution,
     )
     if adjoint is None:
         adjoint = diffrax.RecursiveCheckpointAdjoint()

@@ -11,7 +11,8 @@ list (zipped arrays) of loads x slips x parameter sets, in chunks of a fixed siz
   shape: the last chunk is padded (with copies of its last row), the padding discarded.
 - **Crash-safe, resumable.**  Each chunk is written atomically (temporary file, fsync,
   `os.replace`) as `chunk_000123.npz`; `manifest.json` holds a hash of the sweep
-  definition (inputs, shear model, quadrature, chunk size, dtype, snowjax version).  A
+  definition (inputs, terrain and distribution types, shear model, quadrature, chunk
+  size, dtype, snowjax version).  A
   restart with the same definition validates the chunks on disk (loadable, right columns,
   dtypes and flat indices), recomputes the missing or damaged ones and skips the rest;
   a restart with a different definition refuses with a `ValueError`.
@@ -24,11 +25,24 @@ list (zipped arrays) of loads x slips x parameter sets, in chunks of a fixed siz
   written column by column, so consolidation needs the memory of one chunk too).  The
   chunk directory is itself the dataset: `iter_sweep_chunks` reads it chunk by chunk.
 
+**Any terrain, any stress distribution.**  `snow` is any `snowjax.Terrain` (`WongSnow`,
+`BekkerSoil`, `ReeceSoil`, `LayeredSnow`) and `distribution` `None` or a `WongReece`; the
+terrain's type, the distribution's type and the names of their leaves are part of the
+sweep definition (and of its hash), so a sweep of another terrain or distribution in the
+same directory is refused.
+
 Columns (one row per point, `index` the flat index): `index`, `param_set` (grid mode),
-`load` [N], `slip` [-], every parameter leaf that varies (`p_w` [Pa], `z_w` [m],
-`cohesion` [Pa], `tan_phi` [-], `shear_modulus` [m], `diameter` [m], `width` [m]),
-`entry_angle` [rad], `sinkage` [m], `motion_resistance` [N], `thrust` [N],
-`drawbar_pull` [N], `torque` [N m], `status` (`Status` code).
+`load` [N], `slip` [-], every parameter leaf that varies — the wheel's `diameter` [m],
+`width` [m], then the terrain's leaves under their field names (`WongSnow`: `p_w` [Pa],
+`z_w` [m], `cohesion` [Pa], `tan_phi` [-], `shear_modulus` [m]; `BekkerSoil`: `n` [-],
+`k_c` [N/m^(n+1)], `k_phi` [N/m^(n+2)], `cohesion`, `tan_phi`, `shear_modulus`;
+`ReeceSoil`: `n`, `k_c_prime` [-], `k_phi_prime` [-], `unit_weight` [N/m^3], `cohesion`,
+`tan_phi`, `shear_modulus`; `LayeredSnow`: dotted names of the nested layers,
+`top.p_w`, ..., `bottom.shear_modulus`, then `ice_failure_pressure` [Pa]), then the
+distribution's (`c1`, `c2`, `c3` [-]) — then `entry_angle` [rad], `sinkage` [m],
+`motion_resistance` [N], `thrust` [N], `drawbar_pull` [N], `torque` [N m], `status`
+(`Status` code).  A leaf name that would clash with another column (possible only for a
+user-defined terrain) is prefixed with `terrain.` or `distribution.`.
 """
 
 from __future__ import annotations
@@ -46,17 +60,18 @@ import zipfile
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
+import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from ._params import RigidWheel, WongSnow
+from ._distribution import WongReece
+from ._params import RigidWheel, Terrain
 
 __all__ = ["sweep", "SweepResult", "load_sweep", "iter_sweep_chunks"]
 
 MANIFEST = "manifest.json"
 _FORMAT_TAG = "snowjax-sweep/1"
 _WHEEL_FIELDS = ("diameter", "width")
-_SNOW_FIELDS = ("p_w", "z_w", "cohesion", "tan_phi", "shear_modulus")
 _OUTPUT_FIELDS = (
     "entry_angle",
     "sinkage",
@@ -77,55 +92,115 @@ _BLOCK = 1 << 20  # elements per block when validating or hashing list-mode inpu
 
 
 # ---------------------------------------------------------------------------------------
-# The sweep definition: inputs -> rows of chunk k, hash, columns
+# Parameter sets by name: the leaves of a terrain / distribution as named columns
 # ---------------------------------------------------------------------------------------
 
 
-def _leaf_arrays(obj, cls, fields, what) -> dict[str, np.ndarray]:
-    """Leaves of a parameter set (or a sequence of them) as NumPy arrays, scalar or 1-D."""
+def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:
+    """Array leaves of a parameter set by field path, in pytree order.
+
+    Nested parameter sets get dotted paths (`LayeredSnow`: `top.p_w`, ...,
+    `ice_failure_pressure`); static fields are skipped.
+    """
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(obj):
+        if f.metadata.get("static", False):
+            continue
+        value = getattr(obj, f.name)
+        if isinstance(value, eqx.Module):
+            out.update(_module_leaves(value, f"{prefix}{f.name}."))
+        else:
+            out[f"{prefix}{f.name}"] = value
+    return out
+
+
+def _get_path(obj, path: str):
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+
+def _with_leaves(obj, values: dict[str, Any]):
+    """`obj` with the leaves at the given field paths replaced (no converters run)."""
+    paths = tuple(values)
+    if not paths:
+        return obj
+    return eqx.tree_at(
+        lambda o: tuple(_get_path(o, p) for p in paths), obj, tuple(values[p] for p in paths)
+    )
+
+
+def _parameter_names(terrain, distribution, reserved=()) -> dict[str, tuple[str, str]]:
+    """Public name -> (owner, field path) of every leaf of a terrain and a distribution.
+
+    The name is the field path (`k_phi`, `top.p_w`, `c1`) unless the same path exists in
+    the other object or among `reserved` names; then it is prefixed with its owner
+    (`terrain.` or `distribution.`).
+    """
+    t_paths = list(_module_leaves(terrain))
+    d_paths = [] if distribution is None else list(_module_leaves(distribution))
+    taken = set(reserved)
+    out: dict[str, tuple[str, str]] = {}
+    for owner, paths, other in (
+        ("terrain", t_paths, d_paths),
+        ("distribution", d_paths, t_paths),
+    ):
+        for p in paths:
+            out[p if p not in other and p not in taken else f"{owner}.{p}"] = (owner, p)
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# The sweep definition: inputs -> rows of chunk k, hash, columns
+# ---------------------------------------------------------------------------------------
+
+_TERRAIN_WHAT = "a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow)"
+
+
+def _leaf_arrays(obj, cls, what, kind=None):
+    """Leaves of a parameter set (or a list of them) as NumPy arrays, scalar or 1-D.
+
+    Returns (template, {field path: array}); the template is the parameter set (the
+    first one of a list), whose structure rebuilds a parameter set from the columns.
+    """
+    kind = kind or f"snowjax.{cls.__name__}"
     if isinstance(obj, cls):
-        leaves = {f: np.asarray(getattr(obj, f)) for f in fields}
+        leaves = {f: np.asarray(x) for f, x in _module_leaves(obj).items()}
         for f, x in leaves.items():
             if x.ndim > 1:
                 raise ValueError(
                     f"sweep: {what}.{f} must be a scalar or 1-D (a leading batch of parameter"
                     f" sets); got shape {x.shape}"
                 )
-        return leaves
+        return obj, leaves
     if isinstance(obj, Sequence) and not isinstance(obj, (str, bytes)) and len(obj) > 0:
         if not all(isinstance(o, cls) for o in obj):
-            raise TypeError(f"sweep: {what} must be a {cls.__name__} or a list of them")
+            raise TypeError(f"sweep: {what} must be {kind} or a list of them")
+        if len({type(o) for o in obj}) > 1:
+            raise TypeError(
+                f"sweep: a list of {what} parameter sets must hold one type, got "
+                + ", ".join(sorted({type(o).__name__ for o in obj}))
+            )
         out = {}
-        for f in fields:
-            values = [np.asarray(getattr(o, f)) for o in obj]
+        for f in _module_leaves(obj[0]):
+            values = [np.asarray(_get_path(o, f)) for o in obj]
             if any(v.ndim != 0 for v in values):
                 raise ValueError(
-                    f"sweep: in a list of {cls.__name__}, every {f} must be a scalar"
+                    f"sweep: in a list of {type(obj[0]).__name__}, every {f} must be a scalar"
                 )
             out[f] = np.stack(values)
-        return out
+        return obj[0], out
     raise TypeError(
-        f"sweep: {what} must be a snowjax.{cls.__name__} or a non-empty list of them,"
-        f" got {type(obj).__name__}"
+        f"sweep: {what} must be {kind} or a non-empty list of them, got {type(obj).__name__}"
     )
 
 
-def _rules(shear):
-    cohesion = (
-        (lambda c: c > 0, "> 0 Pa (the simplified model is normalised by c)")
-        if shear == "simplified"
-        else (lambda c: c >= 0, ">= 0 Pa")
-    )
+def _rules():
     return {
         "load": (lambda x: x > 0, "> 0 N"),
         "slip": (lambda x: (x >= -1) & (x <= 1), "in [-1, 1]"),
         "diameter": (lambda x: x > 0, "> 0 m"),
         "width": (lambda x: x > 0, "> 0 m"),
-        "p_w": (lambda x: x > 0, "> 0 Pa"),
-        "z_w": (lambda x: x > 0, "> 0 m"),
-        "cohesion": cohesion,
-        "tan_phi": (lambda x: x >= 0, ">= 0"),
-        "shear_modulus": (lambda x: x > 0, "> 0 m"),
     }
 
 
@@ -134,12 +209,68 @@ def _blocks(n: int):
         yield a, min(a + _BLOCK, n)
 
 
+def _check_parameter_sets(template, leaves, rules_of, label, where, slips=None, grid=True):
+    """Check the leaves of a terrain / distribution with its own `constraints`, by blocks.
+
+    `leaves`: {field path: scalar or 1-D array} (1-D ones of a common length);
+    `rules_of(obj, slip)` returns the object's (name, value, ok, allowed) rules.  A
+    distribution's rules depend on the slip: `slips` are then the sweep's slips, every
+    slip with every parameter set (grid) or zipped with the rows (list).
+    """
+    size = max([x.size for x in leaves.values()] + [1 if slips is None or grid else slips.size])
+    for a, b in _blocks(size):
+        block = {
+            f: np.asarray(x.reshape(-1)[a:b] if x.size > 1 else x.reshape(-1)[:1], dtype=float)
+            for f, x in leaves.items()
+        }
+        slip = None
+        if slips is not None:
+            flat = np.asarray(slips, dtype=float).reshape(-1)
+            if grid:
+                block = {f: x[:, None] for f, x in block.items()}
+                slip = flat[None, :]
+            else:
+                slip = flat[a:b] if flat.size > 1 else flat
+        obj = _with_leaves(template, block)
+        with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+            rules = rules_of(obj, slip)
+        for name, value, ok, allowed in rules:
+            value = np.asarray(value, dtype=float)
+            good = np.isfinite(value) & np.asarray(ok)
+            if good.all():
+                continue
+            shape = np.broadcast_shapes(good.shape, value.shape)
+            good = np.broadcast_to(good, shape)
+            value = np.broadcast_to(value, shape)
+            bad = np.unravel_index(int(np.argmin(good)), shape) if shape else ()
+            got = float(value[bad]) if shape else float(value)
+            if shape and size > 1:
+                at = f" at index {a + int(bad[0])}"
+                if slips is not None and grid:
+                    at = f" at parameter set {a + int(bad[0])}, slip {float(slip[0, bad[1]])!r}"
+            elif shape and slips is not None and grid and slip.size > 1:
+                at = f" at slip {float(slip[0, bad[-1]])!r}"
+            else:
+                at = ""
+            raise ValueError(f"sweep: {label}{name} must be finite and {allowed}; got {got!r}{at}")
+    for f, x in leaves.items():  # leaves a (user-defined) terrain's rules do not cover
+        flat = x.reshape(-1)
+        for a, b in _blocks(flat.size):
+            v = np.asarray(flat[a:b], dtype=float)
+            if not np.isfinite(v).all():
+                j = a + int(np.argmin(np.isfinite(v)))
+                raise ValueError(
+                    f"sweep: {where}.{f} must be finite; got {float(flat[j])!r}"
+                    + (f" at index {j}" if flat.size > 1 else "")
+                )
+
+
 @dataclasses.dataclass(frozen=True)
 class _Definition:
     """Everything that determines the rows of a sweep (and nothing else)."""
 
     grid: bool
-    inputs: dict[str, np.ndarray]  # load, slip, and the 7 leaves; scalar or 1-D
+    inputs: dict[str, np.ndarray]  # load, slip, wheel / terrain / distribution leaves
     n_points: int
     shape: tuple[int, ...]  # grid: (parameter sets, loads, slips); list: (n,)
     chunk_size: int
@@ -148,15 +279,23 @@ class _Definition:
     max_steps: int
     dtype: np.dtype
     version: str
+    terrain: Any  # template parameter sets (structure only; values come from inputs)
+    distribution: Any
+    names: dict[str, tuple[str, str]]  # column -> (owner, field path) of each leaf
 
     @property
     def n_chunks(self) -> int:
         return -(-self.n_points // self.chunk_size)
 
     @property
+    def parameters(self) -> tuple[str, ...]:
+        """Every parameter leaf, as column names: wheel, terrain, distribution."""
+        return _WHEEL_FIELDS + tuple(self.names)
+
+    @property
     def varying(self) -> tuple[str, ...]:
         """Parameter leaves that vary from row to row (stored as columns)."""
-        return tuple(f for f in _WHEEL_FIELDS + _SNOW_FIELDS if self.inputs[f].size > 1)
+        return tuple(f for f in self.parameters if self.inputs[f].size > 1)
 
     @property
     def columns(self) -> dict[str, np.dtype]:
@@ -172,7 +311,7 @@ class _Definition:
         return k * self.chunk_size, min((k + 1) * self.chunk_size, self.n_points)
 
     def chunk_inputs(self, k: int) -> dict[str, np.ndarray]:
-        """Input columns of chunk k (index, param_set, load, slip, all 7 leaves)."""
+        """Input columns of chunk k (index, param_set, load, slip, every parameter leaf)."""
         a, b = self.chunk_bounds(k)
         index = np.arange(a, b, dtype=np.int64)
         out = {"index": index}
@@ -180,7 +319,7 @@ class _Definition:
             p, i_load, i_slip = np.unravel_index(index, self.shape)
             out["param_set"] = p.astype(np.int64)
             pick = {"load": i_load, "slip": i_slip}
-            pick.update({f: p for f in _WHEEL_FIELDS + _SNOW_FIELDS})
+            pick.update({f: p for f in self.parameters})
             for name, sel in pick.items():
                 x = self.inputs[name]
                 out[name] = (x[sel] if x.size > 1 else np.full(b - a, x.reshape(-1)[0])).astype(
@@ -191,6 +330,19 @@ class _Definition:
                 out[name] = np.asarray(x[a:b] if x.size > 1 else np.full(b - a, x.reshape(-1)[0]),
                                        dtype=self.dtype)
         return out
+
+    def build(self, columns: dict[str, Any]):
+        """(wheel, terrain, distribution) with their leaves taken from `columns`."""
+        wheel = RigidWheel(**{f: columns[f] for f in _WHEEL_FIELDS})
+        parts = {"terrain": {}, "distribution": {}}
+        for name, (owner, path) in self.names.items():
+            parts[owner][path] = columns[name]
+        terrain = _with_leaves(self.terrain, parts["terrain"])
+        distribution = (
+            None if self.distribution is None
+            else _with_leaves(self.distribution, parts["distribution"])
+        )
+        return wheel, terrain, distribution
 
     def digest(self) -> str:
         h = hashlib.sha256()
@@ -209,6 +361,11 @@ class _Definition:
             "format": _FORMAT_TAG,
             "snowjax_version": self.version,
             "mode": "grid" if self.grid else "list",
+            "terrain": type(self.terrain).__name__,
+            "distribution": (
+                None if self.distribution is None else type(self.distribution).__name__
+            ),
+            "parameter_names": list(self.parameters),
             "shape": list(self.shape),
             "n_points": self.n_points,
             "chunk_size": self.chunk_size,
@@ -223,7 +380,7 @@ class _Definition:
             small = lambda x: x.size <= 100_000  # noqa: E731
             s["parameters"] = {
                 f: (self.inputs[f].astype(float).tolist() if small(self.inputs[f]) else "(array)")
-                for f in _WHEEL_FIELDS + _SNOW_FIELDS
+                for f in self.parameters
             }
             if self.grid:
                 s["loads"] = self.inputs["load"].astype(float).tolist()
@@ -231,10 +388,15 @@ class _Definition:
         return s
 
 
-def _define(wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_panel, max_steps):
+def _define(
+    wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_panel, max_steps,
+    distribution=None,
+):
     import jax.numpy as jnp
 
     import snowjax
+
+    from ._wheel import _check_model
 
     if shear not in _SHEAR_MODELS:
         raise ValueError(f"sweep: shear must be one of {_SHEAR_MODELS}, got {shear!r}")
@@ -246,10 +408,22 @@ def _define(wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_pan
         raise ValueError(f"sweep: chunk_size must be a positive integer, got {chunk_size!r}")
     if isinstance(max_steps, bool) or int(max_steps) < 1:
         raise ValueError(f"sweep: max_steps must be a positive integer, got {max_steps!r}")
-    leaves = {
-        **_leaf_arrays(wheel, RigidWheel, _WHEEL_FIELDS, "wheel"),
-        **_leaf_arrays(snow, WongSnow, _SNOW_FIELDS, "snow"),
-    }
+    wheel_t, wheel_leaves = _leaf_arrays(wheel, RigidWheel, "wheel")
+    terrain_t, terrain_leaves = _leaf_arrays(snow, Terrain, "snow", _TERRAIN_WHAT)
+    dist_t, dist_leaves = None, {}
+    if distribution is not None:
+        dist_t, dist_leaves = _leaf_arrays(distribution, WongReece, "distribution")
+    try:
+        _check_model(wheel_t, terrain_t, dist_t, shear)
+    except ValueError as err:
+        raise ValueError(f"sweep: {err}") from None
+    names = _parameter_names(
+        terrain_t, dist_t, reserved=("index", "param_set", "load", "slip", *_WHEEL_FIELDS,
+                                     *_OUTPUT_FIELDS, "status"),
+    )
+    leaves = {f: wheel_leaves[f] for f in _WHEEL_FIELDS}
+    for name, (owner, path) in names.items():
+        leaves[name] = (terrain_leaves if owner == "terrain" else dist_leaves)[path]
     inputs = {"load": np.asarray(loads), "slip": np.asarray(slips), **leaves}
     for name in ("load", "slip"):
         x = inputs[name]
@@ -261,8 +435,9 @@ def _define(wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_pan
         if not (np.issubdtype(x.dtype, np.floating) or np.issubdtype(x.dtype, np.integer)):
             raise TypeError(f"sweep: {name} must be real numbers, got dtype {x.dtype}")
     dtype = np.dtype(jnp.result_type(float))
-    rules = _rules(shear)
-    for name, x in inputs.items():
+    rules = _rules()
+    for name in ("load", "slip", *_WHEEL_FIELDS):
+        x = inputs[name]
         ok, allowed = rules[name]
         flat = x.reshape(-1)
         for a, b in _blocks(flat.size):
@@ -292,6 +467,15 @@ def _define(wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_pan
                 f" leaf must have the same length (or length 1); got {lengths}"
             )
         shape = (next(iter(lengths.values()), 1),)
+    # The terrain's and the distribution's own validity rules (those of solve_wheel).
+    _check_parameter_sets(
+        terrain_t, terrain_leaves, lambda t, _: t.constraints(shear), "", "snow"
+    )
+    if dist_t is not None:
+        _check_parameter_sets(
+            dist_t, dist_leaves, lambda d, slip: d.constraints(slip), "", "distribution",
+            slips=inputs["slip"], grid=grid,
+        )
     n_points = int(np.prod(shape))
     return _Definition(
         grid=bool(grid),
@@ -304,6 +488,9 @@ def _define(wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_pan
         max_steps=int(max_steps),
         dtype=dtype,
         version=snowjax.__version__,
+        terrain=terrain_t,
+        distribution=dist_t,
+        names=names,
     )
 
 
@@ -399,18 +586,25 @@ class _Solver:
 
     def submit(self, k: int):
         """Start solving chunk k (asynchronous dispatch); returns a handle for `result`."""
+        import jax.numpy as jnp
+
         from ._wheel import solve_wheel
 
         rows = self.d.chunk_inputs(k)
         n = rows["index"].size
         pad = lambda x: np.pad(x, (0, self.padded - n), mode="edge")  # noqa: E731
-        x = {f: self.place(pad(rows[f])) for f in ("load", "slip", *_WHEEL_FIELDS, *_SNOW_FIELDS)}
+        x = {
+            f: jnp.asarray(self.place(pad(rows[f])))
+            for f in ("load", "slip", *self.d.parameters)
+        }
+        wheel, terrain, distribution = self.d.build(x)
         state = solve_wheel(
-            RigidWheel(**{f: x[f] for f in _WHEEL_FIELDS}),
-            WongSnow(**{f: x[f] for f in _SNOW_FIELDS}),
+            wheel,
+            terrain,
             x["load"],
             x["slip"],
             self.d.shear,
+            distribution=distribution,
             nodes_per_panel=self.d.nodes_per_panel,
             max_steps=self.d.max_steps,
         )
@@ -533,11 +727,12 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
 
 def sweep(
     wheel: RigidWheel | Sequence[RigidWheel],
-    snow: WongSnow | Sequence[WongSnow],
+    snow: Terrain | Sequence[Terrain],
     loads: Float[ArrayLike, " loads"],
     slips: Float[ArrayLike, " slips"],
     *,
     shear: str = "classic",
+    distribution: WongReece | Sequence[WongReece] | None = None,
     out: str | os.PathLike = "snowjax-sweep",
     chunk_size: int = 8192,
     grid: bool = True,
@@ -562,12 +757,19 @@ def sweep(
 
     - `wheel`: `RigidWheel`, or a list of them.  Leaves may be scalars or 1-D arrays
       (a leading batch of parameter sets).
-    - `snow`: `WongSnow`, or a list of them; leaves scalar or 1-D like `wheel`.
-      In grid mode every leaf that varies (of wheel and snow together) must have the
-      same length P: parameter set p takes element p of each of them (zipped).
+    - `snow`: the terrain: a `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+      `LayeredSnow`; SI leaves, see their docs), or a list of terrains of one type;
+      leaves scalar or 1-D like `wheel`.  In grid mode every leaf that varies (of
+      wheel, terrain and distribution together) must have the same length P: parameter
+      set p takes element p of each of them (zipped).
     - `loads`: wheel loads F_z [N], > 0 (scalar or 1-D).
     - `slips`: driving slips i [-] in [-1, 1] (scalar or 1-D).
-    - `shear`: `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`).
+    - `shear`: `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
+      `"simplified"` needs a `WongSnow` and no distribution).
+    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+      (c1, c2, c3 [-]; scalar or 1-D leaves, or a list of them), as in `solve_wheel`.
+      The terrain's and the distribution's types and leaf names are part of the sweep
+      definition: a sweep of another terrain or distribution in `out` is refused.
     - `out`: directory for `manifest.json`, the chunks and the outputs.
     - `chunk_size`: rows per chunk C (rounded up to a multiple of the device count for
       the solve; the padding is discarded).  Memory grows with C, not with the number of
@@ -607,7 +809,7 @@ def sweep(
             raise ValueError(f"sweep: formats must be among {_FORMATS}, got {fmt!r}")
     d = _define(
         wheel, snow, loads, slips, grid=grid, shear=shear, chunk_size=chunk_size,
-        nodes_per_panel=nodes_per_panel, max_steps=max_steps,
+        nodes_per_panel=nodes_per_panel, max_steps=max_steps, distribution=distribution,
     )
     p_count = jax.process_count() if process_count is None else int(process_count)
     p_index = jax.process_index() if process_index is None else int(process_index)

@@ -109,12 +109,16 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
         ("wheel.diameter", wheel.diameter, wheel.diameter > 0, "> 0 m"),
         ("wheel.width", wheel.width, wheel.width > 0, "> 0 m"),
     ]
+    # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
+    # every eager call.
+    kind = type(terrain)
     rules += [
         (f"{terrain.label}.{name}", value, ok, allowed)
-        for name, value, ok, allowed in terrain.constraints(shear)
+        for name, value, ok, allowed in kind.constraints(terrain, shear)
+        + kind.wheel_constraints(terrain, wheel.width)
     ]
     if distribution is not None:
-        rules += distribution.constraints(slip)
+        rules += type(distribution).constraints(distribution, slip)
     return rules
 
 
@@ -628,56 +632,70 @@ def solve_wheel(
     max_steps: int = 64,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
 ) -> WheelState:
-    """Sinkage-versus-slip equilibrium of a rigid wheel on shallow snow, eq. (4.14).
+    """Sinkage-versus-slip equilibrium of a rigid wheel on snow or soil, eq. (4.14).
 
     Finds the entry angle theta0 with `W(theta0) = load`, W the vertical resultant of
-    the normal stress (Wong's law, 4.1) and the shear stress (`shear` model) over the
-    front contact 0 <= theta <= theta0, then evaluates sinkage (4.15), motion resistance
-    (4.16), thrust (2.9), drawbar pull (2.10) and torque (2.12) there.
+    the normal stress (the terrain's pressure–sinkage law at the rim sinkage) and the
+    shear stress (`shear` model), then evaluates sinkage (4.15), motion resistance
+    (4.16), thrust (2.9), drawbar pull (2.10) and torque (2.12) there.  Without a
+    `distribution` the stresses act on the front contact 0 <= theta <= theta0 (the
+    thesis's model); with `WongReece` on theta_r <= theta <= theta0.
 
-    `load`, `slip` and every leaf of `wheel` and `snow` broadcast against each other with
-    NumPy rules; every field of the result has the broadcast shape.  One call therefore
-    sweeps slips x loads x parameter sets.  Works under `jax.jit`, `jax.vmap` and
-    `jax.grad`; gradients come from the implicit function theorem.
+    `load`, `slip` and every leaf of `wheel`, `terrain` and `distribution` broadcast
+    against each other with NumPy rules; every field of the result has the broadcast
+    shape.  One call therefore sweeps slips x loads x parameter sets.  Works under
+    `jax.jit`, `jax.vmap` and `jax.grad`; gradients w.r.t. every leaf, the load and the
+    slip come from the implicit function theorem.
 
     **Arguments:**
 
     - `wheel`: `RigidWheel(diameter [m], width [m])`.
-    - `snow`: `WongSnow(p_w [Pa], z_w [m], cohesion [Pa], tan_phi [-], shear_modulus [m])`.
+    - `terrain`: any `snowjax.Terrain`: `WongSnow(p_w [Pa], z_w [m], cohesion [Pa],
+      tan_phi [-], shear_modulus [m])`, `BekkerSoil(n [-], k_c [N/m^(n+1)],
+      k_phi [N/m^(n+2)], cohesion [Pa], tan_phi [-], shear_modulus=[m])`,
+      `ReeceSoil(n, k_c_prime [-], k_phi_prime [-], unit_weight [N/m^3], cohesion [Pa],
+      tan_phi, shear_modulus=[m])` or `LayeredSnow(top, bottom, ice_failure_pressure [Pa])`.
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [-1, 1] (eq. 2.6: 0 free rolling, 1 spinning in
       place).  Negative slip is braking: the shear displacement, and with it the shear
       stress, thrust and torque, change sign (the Janosi–Hanamoto factor is mirrored,
       `-(1 - exp(-|j|/K))`), so a braked wheel gets a negative thrust.
     - `shear`: `"classic"` (Janosi–Hanamoto, 4.11), `"simplified"` (the thesis's model,
-      4.13) or `"none"` (normal stress only).
-    - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  A batch without
-      braking (all slips >= 0) uses two panels, one with braking four (split at the
-      sign change of the shear stress); defaults (two-panel, four-panel): classic
-      (10, 10), simplified (24, 16), none (8, -).  With the defaults every contact
-      integral is within 1e-7 (relative) of adaptive quadrature over the documented
-      range, except the braking extension of the simplified model (not defined by the
-      thesis), within 1e-4.  An integer sets both.
+      4.13; `WongSnow` without a distribution only) or `"none"` (normal stress only).
+    - `distribution`: None (front region, the thesis) or `WongReece(c1, c2, c3)`.
+    - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  `WongSnow` without
+      a distribution: two panels when all slips are >= 0, four with braking; defaults
+      (two-panel, four-panel): classic (10, 10), simplified (24, 16), none (8, -).  Other
+      terrains / Wong–Reece: 12 nodes per half-panel, 16 when the batch brakes.  With
+      the defaults every contact integral is within 1e-7 (relative) of adaptive
+      quadrature over the documented range, except the braking extension of the
+      simplified model (not defined by the thesis), within 1e-4.  An integer sets all.
     - `max_steps`: Newton iteration limit.
     - `initial_entry_angle`: optional warm start theta0 [rad] (broadcasts like `load`),
       e.g. the previous time step's `entry_angle` inside a simulation; it replaces the
-      closed-form no-shear initial guess.  Non-finite or non-positive values fall back
-      to half the largest admissible entry angle.  It changes only the iteration count,
-      never the converged result (and carries no gradient).
+      initial guess (and, for other terrains, the initial scan of W).  Non-finite or
+      non-positive values fall back to half the largest admissible entry angle.  It
+      carries no gradient.  For a `LayeredSnow` whose W(theta0) is not monotone, a warm
+      start continues from the previous root instead of taking the shallowest one.
 
     **Returns:** `WheelState`.
 
     **Errors and status.**  With concrete inputs, a non-finite or out-of-range value
-    raises `ValueError` naming it: load <= 0, slip outside [-1, 1], diameter, width,
-    p_w, z_w or shear modulus <= 0, cohesion or tan_phi < 0 (cohesion <= 0 for the
-    simplified model).  Under `jax.jit`/`jax.vmap` such elements get
-    `Status.INVALID_INPUT` and NaN fields instead, and the rest of the batch is solved
-    normally.  A load beyond the capacity of the snow layer gives `Status.BOTTOMED_OUT`
-    with `sinkage = z_w`, never NaN.
+    raises `ValueError` naming it (`load`, `slip`, `wheel.width`, `snow.p_w`,
+    `terrain.n`, `terrain.k_c / b + k_phi`, `snow.bottom.z_w`,
+    `distribution.c1 + c2 * slip`, ...); a wrong type raises `TypeError`, a refused
+    terrain / distribution / shear combination `ValueError`.  Under `jax.jit`/`jax.vmap`
+    invalid elements get `Status.INVALID_INPUT` and NaN fields instead, and the rest of
+    the batch is solved normally.  A load beyond the capacity of a snow layer gives
+    `Status.BOTTOMED_OUT` with `sinkage = depth`; one needing theta0 > 85 degrees
+    (always possible on an infinitely deep terrain) `Status.ENTRY_ANGLE_LIMIT`, with the
+    forces at 85 degrees; never NaN.
 
-    **Documented range** (tested): p_w 5-200 kPa, z_w 5-35 cm and below 0.45 D, cohesion
-    0.1-20 kPa, tan phi 0.02-0.8, shear modulus 2-80 mm, diameter 0.5-1.5 m, width
-    0.1-0.6 m, load 0.1-20 kN, slip -0.5 to 0.99.
+    **Documented range** (tested), `WongSnow` front region: p_w 5-200 kPa, z_w 5-35 cm
+    and below 0.45 D, cohesion 0.1-20 kPa, tan phi 0.02-0.8, shear modulus 2-80 mm,
+    diameter 0.5-1.5 m, width 0.1-0.6 m, load 0.1-20 kN, slip -0.5 to 0.99.  Other
+    terrains and Wong–Reece: see the README section "Every terrain law, two stress
+    distributions".
     """
     _check_model(wheel, terrain, distribution, shear)
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
