@@ -188,7 +188,7 @@ def main(argv=None):
     def add(name, value, note=""):
         rows.append((name, value, note))
 
-    steps = ["throughput", "models", "float32", "gradient", "compile", "in-step", "scipy"]
+    steps = ["throughput", "models", "terrains", "float32", "gradient", "compile", "in-step", "scipy"]
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("benchmarks", total=len(steps) + len(sizes) - 1)
         for n in sizes:
@@ -204,6 +204,23 @@ def main(argv=None):
             numbers[f"throughput_{shear}"] = rate
             add(f"solve_wheel {shear} shear, batch {n_ref:,}", f"{rate:,.0f} /s",
                 f"classic: {numbers[f'throughput_{n_ref}']:,.0f} /s")
+        # Every terrain law and the Wong-Reece distribution, same loads and slips, wheel
+        # 1.0 m x 0.4 m where the thesis snow's tyre would exceed 85 degrees on Bekker snow.
+        load, slip = inputs(n_ref)
+        terrains = {
+            "WongSnow + Wong-Reece": (SNOW, sj.WongReece(0.43, 0.32), WHEEL, load),
+            "BekkerSoil.snow_us, front region": (sj.BekkerSoil.snow_us(), None, WHEEL, load / 9),
+            "BekkerSoil.snow_us + Wong-Reece": (sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32), WHEEL, load / 9),
+            "LayeredSnow.ice_layer_example, front region": (sj.LayeredSnow.ice_layer_example(), None, WHEEL, load / 4),
+        }
+        for name, (terrain, dist, wheel, ld) in terrains.items():
+            run = lambda: sj.solve_wheel(wheel, terrain, ld, slip, distribution=dist).entry_angle.block_until_ready()  # noqa: E731,B023
+            run()
+            t = best_time(run, 2)
+            numbers[f"throughput_{name}"] = n_ref / t
+            add(f"solve_wheel {name}, batch {n_ref:,}", f"{n_ref / t:,.0f} /s",
+                f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; loads "
+                + ("1-9 kN" if ld is load else f"1-9 kN / {9 if 'Bekker' in name else 4}"))
         progress.advance(task)
         rate32, err32, finite32 = float32_error(n_ref)
         numbers.update(throughput_float32=rate32, float32_sinkage_error=err32)

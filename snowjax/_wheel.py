@@ -18,6 +18,7 @@ unrolling the Newton iterations.
 from __future__ import annotations
 
 import enum
+import math
 
 import equinox as eqx
 import jax
@@ -140,6 +141,9 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     for name, value, ok, allowed in rules:
         if not (_is_concrete(value) and _is_concrete(ok)):
             continue
+        if np.ndim(value) == 0 and np.ndim(ok) == 0:  # scalars: no array round trip
+            if bool(ok) and math.isfinite(float(value)):
+                continue
         arr = np.asarray(value, dtype=float)
         good = np.isfinite(arr) & np.asarray(ok)
         if not np.all(good):

@@ -1,0 +1,148 @@
+"""Compare the Wong-snow front-region path of two revisions, interleaved, on this machine.
+
+    python benchmarks/compare.py 2280f0c            # that revision vs the working tree
+    python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --readme
+
+Shared 2-core virtual machines drift by tens of percent between runs minutes apart, so
+two separate `benchmarks/run.py` tables cannot show a 10 % change.  This script checks out
+the old revision into a temporary git worktree and measures both trees in fresh processes,
+alternating old, new, old, new, ... for `--rounds` rounds; each row keeps the best time of
+each tree over all rounds.  Rows: `solve_wheel` throughput at batch 1 to 100,000 (thesis
+tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64) and the
+in-step latency (4 wheels in a jitted `lax.scan`, warm-started).  `--readme` writes the
+table between `<!-- compare:start -->` and `<!-- compare:end -->` in README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+SIZES = (1, 10, 100, 1_000, 10_000, 100_000)
+
+
+def measure() -> dict[str, float]:
+    """Run in a fresh process whose `snowjax` is the tree under test; seconds per call."""
+    import jax  # noqa: PLC0415
+
+    jax.config.update("jax_enable_x64", True)
+    import jax.numpy as jnp  # noqa: PLC0415
+    import numpy as np  # noqa: PLC0415
+
+    import snowjax as sj  # noqa: PLC0415
+
+    wheel, snow = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
+    rng = np.random.default_rng(0)
+    out: dict[str, float] = {"snowjax": sj.__file__}  # type: ignore[dict-item]
+
+    def best(fn, repeats):
+        fn()
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t)
+        return min(times)
+
+    for n in SIZES:
+        load, slip = rng.uniform(1e3, 9e3, n), rng.uniform(0.0, 0.9, n)
+        run = lambda: sj.solve_wheel(wheel, snow, load, slip).entry_angle.block_until_ready()  # noqa: E731,B023
+        out[f"batch {n:,}"] = best(run, 30 if n <= 1_000 else 5 if n <= 10_000 else 2)
+
+    loads, offsets = jnp.full(4, 5000.0), jnp.arange(4, dtype=float)
+
+    def step(theta, t):
+        slip = 0.25 + 0.2 * jnp.sin(0.01 * t + offsets)
+        st = sj.solve_wheel(wheel, snow, loads, slip, initial_entry_angle=theta)
+        return st.entry_angle, st.drawbar_pull
+
+    scan = jax.jit(lambda ts: jax.lax.scan(step, jnp.full(4, 0.5), ts))
+    ts = jnp.arange(500, dtype=float)
+    out["in-step, per wheel"] = best(lambda: jax.block_until_ready(scan(ts)), 3) / (500 * 4)
+    return out
+
+
+def _run_tree(tree: pathlib.Path) -> dict[str, float]:
+    env = dict(os.environ, PYTHONPATH=str(tree), JAX_PLATFORMS="cpu")
+    code = f"import sys, json; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); " \
+           "import compare; print(json.dumps(compare.measure()))"
+    res = subprocess.run([sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(),
+                         capture_output=True, text=True, check=True)
+    out = json.loads(res.stdout.strip().splitlines()[-1])
+    assert out.pop("snowjax").startswith(str(tree)), "measured the wrong snowjax"
+    return out
+
+
+def _fmt(name: str, seconds: float) -> str:
+    if name.startswith("batch"):
+        n = int(name.split()[1].replace(",", ""))
+        return f"{n / seconds:,.0f} /s"
+    return f"{seconds * 1e6:.1f} us"
+
+
+def main(argv=None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("revision", help="the old git revision (e.g. a commit hash)")
+    parser.add_argument("--new", help="measure this revision instead of the working tree")
+    parser.add_argument("--rounds", type=int, default=3)
+    parser.add_argument("--readme", action="store_true", help="write the table into README.md")
+    args = parser.parse_args(argv)
+
+    def rev(name):
+        return subprocess.run(["git", "rev-parse", "--short", name], cwd=ROOT,
+                              capture_output=True, text=True, check=True).stdout.strip()
+
+    old_rev = rev(args.revision)
+    new_rev = rev(args.new) if args.new else f"working tree at {rev('HEAD')}"
+    with tempfile.TemporaryDirectory() as tmp:
+        trees = {"old": pathlib.Path(tmp) / "old", "new": ROOT}
+        revs = {"old": old_rev}
+        if args.new:
+            trees["new"], revs["new"] = pathlib.Path(tmp) / "new", new_rev
+        for label, rev_ in revs.items():
+            subprocess.run(["git", "worktree", "add", "--detach", str(trees[label]), rev_],
+                           cwd=ROOT, capture_output=True, check=True)
+        try:
+            best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
+            for r in range(args.rounds):
+                for label, tree in trees.items():
+                    for name, t in _run_tree(tree).items():
+                        best[label][name] = min(t, best[label].get(name, float("inf")))
+                print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
+        finally:
+            for label in revs:
+                subprocess.run(["git", "worktree", "remove", "--force", str(trees[label])],
+                               cwd=ROOT, capture_output=True)
+
+    lines = [
+        f"Old: {old_rev}; new: {new_rev}. Best of {args.rounds} interleaved "
+        f"rounds each ({time.strftime('%Y-%m-%d')}).",
+        "",
+        f"| Wong snow, front region | {old_rev} | {new_rev} | new / old time |",
+        "|---|---|---|---|",
+    ]
+    for name in best["old"]:
+        o, n = best["old"][name], best["new"][name]
+        lines.append(f"| {name} | {_fmt(name, o)} | {_fmt(name, n)} | {n / o:.2f} |")
+    table = "\n".join(lines)
+    print(table)
+    if args.readme:
+        readme = ROOT / "README.md"
+        text = readme.read_text()
+        start, end = "<!-- compare:start -->", "<!-- compare:end -->"
+        if start not in text:
+            raise SystemExit(f"README.md has no {start} marker")
+        head, rest = text.split(start, 1)
+        _, tail = rest.split(end, 1)
+        readme.write_text(f"{head}{start}\n{table}\n{end}{tail}")
+
+
+if __name__ == "__main__":
+    main()
