@@ -4,134 +4,136 @@ The physics follows Sankapalli (2004), *Predictive semi-empirical analysis for t
 interaction* (MSc thesis, University of Alaska Fairbanks).  SI units throughout.
 """
 
-from ._params import BekkerSoil as BekkerSoil
-from ._params import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
-from ._params import LayeredSnow as LayeredSnow
-from ._params import ReeceSoil as ReeceSoil
-from ._params import RigidWheel as RigidWheel
-from ._params import Terrain as Terrain
-from ._params import WongSnow as WongSnow
-from ._distribution import WongReece as WongReece
-from ._terrain import bekker_pressure as bekker_pressure
-from ._terrain import gawwad_crolla_shear as gawwad_crolla_shear
-from ._terrain import gawwad_crolla_unloading_pressure as gawwad_crolla_unloading_pressure
-from ._terrain import janosi_hanamoto as janosi_hanamoto
-from ._terrain import mohr_coulomb as mohr_coulomb
-from ._terrain import reece_pressure as reece_pressure
-from ._terrain import wong_pressure as wong_pressure
-from ._terrain import wong_sinkage as wong_sinkage
+# --- terrain laws ---
+
+from ._terrain.bekker import BekkerSoil as BekkerSoil
+from ._constants import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
+from ._terrain.layered import LayeredSnow as LayeredSnow
+from ._terrain.reece import ReeceSoil as ReeceSoil
+from ._wheel.geometry import RigidWheel as RigidWheel
+from ._terrain.base import Terrain as Terrain
+from ._terrain.wong import WongSnow as WongSnow
+from ._wheel.distribution import WongReece as WongReece
+from ._terrain.bekker import bekker_pressure as bekker_pressure
+from ._terrain.shear import gawwad_crolla_shear as gawwad_crolla_shear
+from ._terrain.shear import gawwad_crolla_unloading_pressure as gawwad_crolla_unloading_pressure
+from ._terrain.shear import janosi_hanamoto as janosi_hanamoto
+from ._terrain.shear import mohr_coulomb as mohr_coulomb
+from ._terrain.reece import reece_pressure as reece_pressure
+from ._terrain.wong import wong_pressure as wong_pressure
+from ._terrain.wong import wong_sinkage as wong_sinkage
 
 # --- wheel (chapter 4) ---
-from ._contact import ContactForces as ContactForces
-from ._contact import contact_forces as contact_forces
-from ._contact import max_sinkage as max_sinkage
-from ._contact import normal_stress as normal_stress
-from ._contact import rim_sinkage as rim_sinkage
-from ._contact import shear_displacement as shear_displacement
-from ._contact import shear_stress as shear_stress
-from ._wheel import Status as Status
-from ._wheel import WheelState as WheelState
-from ._wheel import solve_wheel as solve_wheel
+from ._wheel.contact import ContactForces as ContactForces
+from ._wheel.contact import contact_forces as contact_forces
+from ._wheel.contact import max_sinkage as max_sinkage
+from ._wheel.contact import normal_stress as normal_stress
+from ._wheel.contact import rim_sinkage as rim_sinkage
+from ._wheel.contact import shear_displacement as shear_displacement
+from ._wheel.contact import shear_stress as shear_stress
+from ._wheel.equilibrium import Status as Status
+from ._wheel.equilibrium import WheelState as WheelState
+from ._wheel.equilibrium import solve_wheel as solve_wheel
 
 # --- tire (chapter 3) ---
-from ._tire import TireCoefficients as TireCoefficients
-from ._tire import TireParameters as TireParameters
-from ._tire import TireForces as TireForces
-from ._tire import TireSensitivities as TireSensitivities
-from ._tire import ShearForceVariationRatios as ShearForceVariationRatios
-from ._tire import tire_forces as tire_forces
-from ._tire import tire_forces_from_parameters as tire_forces_from_parameters
-from ._tire import tire_parameters as tire_parameters
-from ._tire import tire_force_sensitivities as tire_force_sensitivities
-from ._tire import shear_force_variation_ratios as shear_force_variation_ratios
-from ._tire import longitudinal_stiffness as longitudinal_stiffness
-from ._tire import lateral_stiffness as lateral_stiffness
-from ._tire import longitudinal_friction as longitudinal_friction
-from ._tire import lateral_friction as lateral_friction
-from ._tire import contact_pressure_constant as contact_pressure_constant
-from ._tire import shear_distribution as shear_distribution
-from ._tire import normalized_longitudinal_slip as normalized_longitudinal_slip
-from ._tire import normalized_lateral_slip as normalized_lateral_slip
-from ._tire import normalized_combined_slip as normalized_combined_slip
-from ._tire import pure_longitudinal_force as pure_longitudinal_force
-from ._tire import pure_lateral_force as pure_lateral_force
-from ._tire import longitudinal_slip as longitudinal_slip
-from ._tire import driving_slip as driving_slip
-from ._tire import braking_slip as braking_slip
-from ._tire import longitudinal_from_driving_slip as longitudinal_from_driving_slip
-from ._tire import driving_from_longitudinal_slip as driving_from_longitudinal_slip
-from ._tire import longitudinal_from_braking_slip as longitudinal_from_braking_slip
-from ._tire import braking_from_longitudinal_slip as braking_from_longitudinal_slip
+from ._tire.tire import TireCoefficients as TireCoefficients
+from ._tire.tire import TireParameters as TireParameters
+from ._tire.tire import TireForces as TireForces
+from ._tire.tire import TireSensitivities as TireSensitivities
+from ._tire.tire import ShearForceVariationRatios as ShearForceVariationRatios
+from ._tire.tire import tire_forces as tire_forces
+from ._tire.tire import tire_forces_from_parameters as tire_forces_from_parameters
+from ._tire.tire import tire_parameters as tire_parameters
+from ._tire.tire import tire_force_sensitivities as tire_force_sensitivities
+from ._tire.tire import shear_force_variation_ratios as shear_force_variation_ratios
+from ._tire.tire import longitudinal_stiffness as longitudinal_stiffness
+from ._tire.tire import lateral_stiffness as lateral_stiffness
+from ._tire.tire import longitudinal_friction as longitudinal_friction
+from ._tire.tire import lateral_friction as lateral_friction
+from ._tire.tire import contact_pressure_constant as contact_pressure_constant
+from ._tire.tire import shear_distribution as shear_distribution
+from ._tire.tire import normalized_longitudinal_slip as normalized_longitudinal_slip
+from ._tire.tire import normalized_lateral_slip as normalized_lateral_slip
+from ._tire.tire import normalized_combined_slip as normalized_combined_slip
+from ._tire.tire import pure_longitudinal_force as pure_longitudinal_force
+from ._tire.tire import pure_lateral_force as pure_lateral_force
+from ._tire.tire import longitudinal_slip as longitudinal_slip
+from ._tire.tire import driving_slip as driving_slip
+from ._tire.tire import braking_slip as braking_slip
+from ._tire.tire import longitudinal_from_driving_slip as longitudinal_from_driving_slip
+from ._tire.tire import driving_from_longitudinal_slip as driving_from_longitudinal_slip
+from ._tire.tire import longitudinal_from_braking_slip as longitudinal_from_braking_slip
+from ._tire.tire import braking_from_longitudinal_slip as braking_from_longitudinal_slip
 
 # --- empirical (chapter 2) ---
-from ._empirical import bekker_compaction_resistance as bekker_compaction_resistance
-from ._empirical import bekker_rolling_resistance as bekker_rolling_resistance
-from ._empirical import bekker_wheel_sinkage as bekker_wheel_sinkage
-from ._empirical import brixius as brixius
-from ._empirical import brixius_wheel_numeric as brixius_wheel_numeric
-from ._empirical import BrixiusTraction as BrixiusTraction
-from ._empirical import compare_motion_resistance as compare_motion_resistance
-from ._empirical import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
-from ._empirical import gross_traction_coefficient as gross_traction_coefficient
-from ._empirical import net_traction_coefficient as net_traction_coefficient
-from ._empirical import richmond_resistance as richmond_resistance
-from ._empirical import rolling_resistance_coefficient as rolling_resistance_coefficient
-from ._empirical import van_es_compaction_resistance as van_es_compaction_resistance
-from ._empirical import van_es_rolling_resistance as van_es_rolling_resistance
+from ._empirical.models import bekker_compaction_resistance as bekker_compaction_resistance
+from ._empirical.models import bekker_rolling_resistance as bekker_rolling_resistance
+from ._empirical.models import bekker_wheel_sinkage as bekker_wheel_sinkage
+from ._empirical.models import brixius as brixius
+from ._empirical.models import brixius_wheel_numeric as brixius_wheel_numeric
+from ._empirical.models import BrixiusTraction as BrixiusTraction
+from ._empirical.models import compare_motion_resistance as compare_motion_resistance
+from ._empirical.models import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
+from ._empirical.models import gross_traction_coefficient as gross_traction_coefficient
+from ._empirical.models import net_traction_coefficient as net_traction_coefficient
+from ._empirical.models import richmond_resistance as richmond_resistance
+from ._empirical.models import rolling_resistance_coefficient as rolling_resistance_coefficient
+from ._empirical.models import van_es_compaction_resistance as van_es_compaction_resistance
+from ._empirical.models import van_es_rolling_resistance as van_es_rolling_resistance
 
-# --- calibration (issue 5): snowjax/_fit.py ---
-from ._fit import FitResult as FitResult
-from ._fit import fit_parameter_names as fit_parameter_names
-from ._fit import fit_plate_sinkage as fit_plate_sinkage
-from ._fit import fit_tire_coefficients as fit_tire_coefficients
-from ._fit import fit_wheel as fit_wheel
-from ._fit import thesis_plate_test as thesis_plate_test
-from ._fit import thesis_tire_table as thesis_tire_table
+# --- calibration ---
+from ._fit.fit import FitResult as FitResult
+from ._fit.fit import fit_parameter_names as fit_parameter_names
+from ._fit.fit import fit_plate_sinkage as fit_plate_sinkage
+from ._fit.fit import fit_tire_coefficients as fit_tire_coefficients
+from ._fit.fit import fit_wheel as fit_wheel
+from ._fit.fit import thesis_plate_test as thesis_plate_test
+from ._fit.fit import thesis_tire_table as thesis_tire_table
 
-# --- vehicle simulation (issue 7): snowjax/_sim.py ---
-from ._sim import TorqueProfile as TorqueProfile
-from ._sim import Trajectory as Trajectory
-from ._sim import Vehicle as Vehicle
-from ._sim import WheelForces as WheelForces
-from ._sim import simulate_longitudinal as simulate_longitudinal
-from ._sim import wheel_forces as wheel_forces
-from ._sim import wheel_kinematics as wheel_kinematics
+# --- vehicle simulation ---
+from ._sim.simulation import TorqueProfile as TorqueProfile
+from ._sim.simulation import Trajectory as Trajectory
+from ._sim.simulation import Vehicle as Vehicle
+from ._sim.simulation import WheelForces as WheelForces
+from ._sim.simulation import simulate_longitudinal as simulate_longitudinal
+from ._sim.simulation import wheel_forces as wheel_forces
+from ._sim.simulation import wheel_kinematics as wheel_kinematics
 
-# --- sweeps (issue 8): snowjax/_sweep.py ---
-from ._sweep import SweepResult as SweepResult
-from ._sweep import iter_sweep_chunks as iter_sweep_chunks
-from ._sweep import load_sweep as load_sweep
-from ._sweep import sweep as sweep
+# --- sweeps ---
+from ._sweep.sweep import SweepResult as SweepResult
+from ._sweep.sweep import iter_sweep_chunks as iter_sweep_chunks
+from ._sweep.sweep import load_sweep as load_sweep
+from ._sweep.sweep import sweep as sweep
 
-# --- reproduction of the thesis (issue 6): snowjax/_reproduce.py, _derivatives.py ---
-from ._reproduce import reproduce as reproduce
-from ._derivatives import DimensionlessConstants as DimensionlessConstants
-from ._derivatives import ShearDerivatives as ShearDerivatives
-from ._derivatives import shear_derivatives as shear_derivatives
-from ._derivatives import classic_normalized_shear as classic_normalized_shear
-from ._derivatives import simplified_normalized_shear as simplified_normalized_shear
-from ._derivatives import max_normalized_pressure as max_normalized_pressure
-from ._derivatives import contact_angle_at_pressure as contact_angle_at_pressure
-from ._derivatives import thesis_table_4_3 as thesis_table_4_3
-from ._derivatives import thesis_table_4_4 as thesis_table_4_4
-from ._derivatives import thesis_table_4_5 as thesis_table_4_5
-from ._derivatives import thesis_table_4_6 as thesis_table_4_6
-from ._derivatives import thesis_appendix_dz_dsigma as thesis_appendix_dz_dsigma
+# --- reproduction of the thesis; closed-form derivatives of chapter 4 ---
+from ._reproduce.reproduce import reproduce as reproduce
+from ._wheel.derivatives import DimensionlessConstants as DimensionlessConstants
+from ._wheel.derivatives import ShearDerivatives as ShearDerivatives
+from ._wheel.derivatives import shear_derivatives as shear_derivatives
+from ._wheel.derivatives import classic_normalized_shear as classic_normalized_shear
+from ._wheel.derivatives import simplified_normalized_shear as simplified_normalized_shear
+from ._wheel.derivatives import max_normalized_pressure as max_normalized_pressure
+from ._wheel.derivatives import contact_angle_at_pressure as contact_angle_at_pressure
+from ._wheel.derivatives import thesis_table_4_3 as thesis_table_4_3
+from ._wheel.derivatives import thesis_table_4_4 as thesis_table_4_4
+from ._wheel.derivatives import thesis_table_4_5 as thesis_table_4_5
+from ._wheel.derivatives import thesis_table_4_6 as thesis_table_4_6
+from ._wheel.derivatives import thesis_appendix_dz_dsigma as thesis_appendix_dz_dsigma
 
-# --- CRREL shallow-snow model and validation (issue 16): snowjax/_crrel.py, _validate.py ---
-from ._crrel import CRREL_FINAL_DENSITIES as CRREL_FINAL_DENSITIES
-from ._crrel import CRRELWheel as CRRELWheel
-from ._crrel import crrel_contact_arc as crrel_contact_arc
-from ._crrel import crrel_drawbar as crrel_drawbar
-from ._crrel import crrel_final_density as crrel_final_density
-from ._crrel import crrel_sinkage as crrel_sinkage
-from ._crrel import crrel_wheel as crrel_wheel
-from ._validate import ValidationModel as ValidationModel
-from ._validate import ValidationResult as ValidationResult
-from ._validate import crrel_95_1_examples as crrel_95_1_examples
-from ._validate import shoop_2001_table11 as shoop_2001_table11
-from ._validate import validate as validate
-from ._validate import validation_models as validation_models
-from ._validate import wheel_validation_model as wheel_validation_model
+# --- CRREL shallow-snow model and validation against measured data ---
+from ._empirical.crrel import CRREL_FINAL_DENSITIES as CRREL_FINAL_DENSITIES
+from ._empirical.crrel import CRRELWheel as CRRELWheel
+from ._empirical.crrel import crrel_contact_arc as crrel_contact_arc
+from ._empirical.crrel import crrel_drawbar as crrel_drawbar
+from ._empirical.crrel import crrel_final_density as crrel_final_density
+from ._empirical.crrel import crrel_sinkage as crrel_sinkage
+from ._empirical.crrel import crrel_wheel as crrel_wheel
+from ._validate.validate import ValidationModel as ValidationModel
+from ._validate.validate import ValidationResult as ValidationResult
+from ._validate.validate import crrel_95_1_examples as crrel_95_1_examples
+from ._validate.validate import shoop_2001_table11 as shoop_2001_table11
+from ._validate.validate import validate as validate
+from ._validate.validate import validation_models as validation_models
+from ._validate.validate import wheel_validation_model as wheel_validation_model
 
 __version__ = "0.1.0"

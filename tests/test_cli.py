@@ -9,8 +9,8 @@ import pathlib
 
 import pytest
 
-from snowjax import _reproduce
-from snowjax._cli import main
+from snowjax._cli.app import main
+from snowjax._reproduce import reproduce as _reproduce
 
 
 def _stub(missing=()):

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import snowjax as sj
-from snowjax import _derivatives as dv
+from snowjax._wheel import derivatives as dv
 
 # Table 4.1, made dimensional with an arbitrary D and p_w (the model is dimensionless).
 D = 0.736

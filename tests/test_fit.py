@@ -22,7 +22,8 @@ import pytest
 from scipy.optimize import curve_fit
 
 import snowjax as sj
-from snowjax import _cli, _fit
+from snowjax._cli import app as _cli
+from snowjax._fit import fit as _fit
 from tests.notebook_runner import outputs_text, run_notebook
 
 TIGHT = dict(ftol=1e-15, xtol=1e-15, gtol=1e-15, maxfev=100_000)

@@ -21,8 +21,8 @@ import numpy as np
 import pytest
 
 import snowjax as sj
-from snowjax import _sweep
-from snowjax._cli import main
+from snowjax._cli.app import main
+from snowjax._sweep import sweep as _sweep
 from tests.notebook_runner import outputs_text, run_notebook
 
 REPO = pathlib.Path(__file__).resolve().parents[1]

@@ -18,8 +18,9 @@ import scipy.integrate
 import scipy.optimize
 
 import snowjax as sj
-from snowjax import _fit
-from snowjax._cli import main
+from snowjax._cli.app import main
+from snowjax._fit import fit as _fit
+from snowjax._sweep import sweep as _sweep
 
 WHEEL = sj.RigidWheel.thesis_tire()  # D 0.736 m, b 0.235 m
 BEKKER = sj.BekkerSoil.snow_us()  # n 1.6, k_c 4.37 kN/m^2.6, k_phi 196.72 kN/m^3.6
@@ -232,7 +233,7 @@ def test_sweep_bekker_wong_reece_equals_solve_wheel(bekker_sweep):
         sj.sweep(WHEEL, soil, SWEEP_LOADS, SWEEP_SLIPS, distribution=sj.WongReece(0.8, 0.32),
                  out=out, chunk_size=N)  # fmt: skip
     layered = sj.LayeredSnow.ice_layer_example()
-    d = sj._sweep._define(WHEEL, layered, SWEEP_LOADS, SWEEP_SLIPS, grid=True, shear="classic",
+    d = _sweep._define(WHEEL, layered, SWEEP_LOADS, SWEEP_SLIPS, grid=True, shear="classic",
                           chunk_size=N, nodes_per_panel=None, max_steps=64)  # fmt: skip
     assert "top.p_w" in d.parameters and "ice_failure_pressure" in d.parameters
 

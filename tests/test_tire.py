@@ -15,7 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import snowjax as sj
-from snowjax import _tire
+from snowjax._tire import tire as _tire
 
 TABLE_LOADS_KN = [3.5, 4.5, 6.24, 7.5]
 # Table 3.2 (FEA data): C_s, C_alpha [kN/rad], mu_x, mu_y, E1.

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 import snowjax as sj
-from snowjax._cli import main
-from snowjax._validate import _loo_from_grid
+from snowjax._cli.app import main
+from snowjax._validate.validate import _loo_from_grid
 
 
 def test_shipped_data_as_printed():

@@ -173,8 +173,8 @@ def _build(args):
     formats)."""
     import numpy as np
 
-    from ._distribution import WongReece
-    from ._params import RigidWheel
+    from .._wheel.distribution import WongReece
+    from .._wheel.geometry import RigidWheel
 
     loads = _values(args.loads, "loads")
     slips = _values(args.slips, "slips")
@@ -254,9 +254,12 @@ def terrain_from_options(terrain_kind, preset_name, snow_preset, terrain_given, 
     """
     import numpy as np
 
-    from ._params import THESIS_P_W, PLATE_RULE_P_W, BekkerSoil, LayeredSnow, ReeceSoil
-    from ._params import WongSnow
-    from ._sweep import _module_leaves, _with_leaves
+    from .._constants import PLATE_RULE_P_W, THESIS_P_W
+    from .._leaves import _module_leaves, _with_leaves
+    from .._terrain.bekker import BekkerSoil
+    from .._terrain.layered import LayeredSnow
+    from .._terrain.reece import ReeceSoil
+    from .._terrain.wong import WongSnow
 
     value = lambda f, default: terrain_given.get(f, default)  # noqa: E731
     if snow_preset is not None:
@@ -335,7 +338,7 @@ def run(args) -> int:
                 num_processes=args.num_processes,
                 process_id=args.process_id,
             )
-        from ._sweep import sweep
+        from .._sweep.sweep import sweep
 
         wheel, snow, distribution, loads, slips, formats = _build(args)
         result = sweep(

@@ -35,7 +35,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from ._empirical import (
+from .models import (
     ICE_DENSITY,
     _check,
     _nan_unless,

@@ -53,16 +53,25 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 import optimistix as optx
-from jaxtyping import Array, ArrayLike, Float
+from jaxtyping import ArrayLike, Float
 
-from ._distribution import WongReece
-from ._params import DEFAULT_SHEAR_MODULUS, BekkerSoil, RigidWheel, Terrain, WongSnow
-from ._sweep import _module_leaves, _parameter_names, _with_leaves
-from ._terrain import bekker_pressure, reece_pressure, wong_pressure
-from ._tire import TireCoefficients, lateral_stiffness, longitudinal_stiffness
-from ._tire import lateral_friction, longitudinal_friction
-from ._wheel import Status, _check_model, solve_wheel
-from ._wheel import _checks as _wheel_checks
+from .._constants import DEFAULT_SHEAR_MODULUS
+from .._leaves import _module_leaves, _parameter_names, _with_leaves
+from .._terrain.base import Terrain
+from .._terrain.bekker import BekkerSoil, bekker_pressure
+from .._terrain.reece import reece_pressure
+from .._terrain.wong import WongSnow, wong_pressure
+from .._tire.tire import (
+    TireCoefficients,
+    lateral_friction,
+    lateral_stiffness,
+    longitudinal_friction,
+    longitudinal_stiffness,
+)
+from .._wheel.distribution import WongReece
+from .._wheel.equilibrium import Status, _check_model, solve_wheel
+from .._wheel.equilibrium import _checks as _wheel_checks
+from .._wheel.geometry import RigidWheel
 
 __all__ = [
     "FitResult",

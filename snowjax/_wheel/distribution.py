@@ -12,7 +12,7 @@ from __future__ import annotations
 import equinox as eqx
 from jaxtyping import Array, ArrayLike, Float
 
-from ._params import _as_float, _leaf
+from .._leaves import _as_float, _leaf
 
 __all__ = ["WongReece"]
 

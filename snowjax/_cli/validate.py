@@ -43,7 +43,7 @@ def run(args) -> int:
     jax.config.update("jax_enable_x64", True)
     from rich.console import Console
 
-    from ._validate import (
+    from .._validate.validate import (
         DEFAULT_TYRE_WIDTH,
         DEFAULT_WHEEL_LOAD,
         metrics_table_markdown,

@@ -28,7 +28,10 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from ._contact import (
+from .._terrain.base import Terrain
+from .._terrain.layered import LayeredSnow
+from .._terrain.wong import WongSnow
+from .contact import (
     ShearModel,
     _broadcast_leaves,
     _check_shear,
@@ -39,9 +42,9 @@ from ._contact import (
     _with_rule_for,
     max_sinkage,
 )
-from ._contact_general import _general_nodes_for, general_contact
-from ._distribution import WongReece
-from ._params import LayeredSnow, RigidWheel, Terrain, WongSnow
+from .distribution import WongReece
+from .general import _general_nodes_for, general_contact
+from .geometry import RigidWheel
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 

@@ -38,7 +38,7 @@ def run(args) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from ._reproduce import FIGURES, reproduce
+    from .._reproduce.reproduce import FIGURES, reproduce
 
     console = Console()
     start = time.perf_counter()

@@ -74,10 +74,12 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from ._contact import ShearModel, _check_shear
-from ._distribution import WongReece
-from ._params import RigidWheel, Terrain, _as_float
-from ._wheel import _check_model, solve_wheel
+from .._leaves import _as_float
+from .._terrain.base import Terrain
+from .._wheel.contact import ShearModel, _check_shear
+from .._wheel.distribution import WongReece
+from .._wheel.equilibrium import _check_model, solve_wheel
+from .._wheel.geometry import RigidWheel
 
 __all__ = [
     "STANDARD_GRAVITY",

@@ -49,7 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ._params import _leaf
+from .._leaves import _leaf
 
 __all__ = [
     "longitudinal_slip",

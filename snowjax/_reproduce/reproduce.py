@@ -27,8 +27,8 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ._fit import thesis_tire_table
-from ._reproduce_terrain import TERRAIN_CAPTION as _TERRAIN_CAPTION
+from .._fit.fit import thesis_tire_table
+from .terrain import TERRAIN_CAPTION as _TERRAIN_CAPTION
 
 __all__ = ["FigureSpec", "FIGURES", "reproduce", "TABLE_3_2"]
 
@@ -186,7 +186,11 @@ def _write_csv(path: pathlib.Path, columns, rows) -> None:
 
 def _fig_2_1(ctx: _Context) -> FigureResult:
     import snowjax as sj
-    from snowjax import fit_plate_sinkage, thesis_plate_test  # issue 5 (snowjax/_fit.py)
+
+    from .._fit.fit import (  # issue 5 (snowjax/_fit.py)
+        fit_plate_sinkage,
+        thesis_plate_test,
+    )
 
     data = thesis_plate_test()
     z = np.asarray(data["sinkage"], dtype=float)
@@ -831,7 +835,7 @@ def _fig_3_16(ctx):
 def _derivative_grid(ctx):
     if "derivatives" in ctx.cache:
         return ctx.cache["derivatives"]
-    from . import _derivatives as dv
+    from .._wheel import derivatives as dv
 
     k = dv.DimensionlessConstants.thesis()
     s_max = float(dv.max_normalized_pressure(k))
@@ -1156,7 +1160,7 @@ def _status_names(codes):
 
 
 def _fig_terrains(ctx):
-    from ._reproduce_terrain import terrain_figure
+    from .terrain import terrain_figure
 
     return terrain_figure(ctx, FigureResult, _subplots, _status_names)
 
@@ -1266,7 +1270,7 @@ def _derivative_tables(ctx) -> tuple[str, list, list]:
     import jax
     import jax.numpy as jnp
 
-    from . import _derivatives as dv
+    from .._wheel import derivatives as dv
 
     g = _derivative_grid(ctx)
     k = dv.DimensionlessConstants.thesis()

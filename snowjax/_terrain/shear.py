@@ -1,11 +1,8 @@
-"""Pressure–sinkage and shear-strength laws of chapter 2 and 4 of the thesis.
+"""Shear-strength and shear-mobilisation laws of chapters 2 and 4 (Mohr–Coulomb,
+Janosi–Hanamoto, Gawwad–Crolla).
 
 Every function is pure, element-wise and broadcasts its arguments with NumPy rules, so it
-works unchanged under `jax.jit`, `jax.vmap` and `jax.grad`.  SI units throughout: lengths
-in m, stresses and pressures in Pa, moduli in the units Bekker's law requires.
-
-Equation numbers refer to Sankapalli (2004), *Predictive semi-empirical analysis for
-tire/snow interaction*, MSc thesis, University of Alaska Fairbanks.
+works unchanged under `jax.jit`, `jax.vmap` and `jax.grad`.  SI units throughout.
 """
 
 from __future__ import annotations
@@ -13,127 +10,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-__all__ = [
-    "bekker_pressure",
-    "wong_sinkage",
-    "wong_pressure",
-    "reece_pressure",
-    "mohr_coulomb",
-    "janosi_hanamoto",
-    "gawwad_crolla_shear",
-    "gawwad_crolla_unloading_pressure",
-]
-
-
-def _clip_negative(x) -> Array:
-    """max(x, 0) with gradient 1 at x = 0 (jnp.maximum would split it 1/2 : 1/2)."""
-    x = jnp.asarray(x)
-    return jnp.where(x >= 0, x, 0.0)
-
-
-def _safe_power(x: Array, n: Array) -> Array:
-    """`x**n` for x >= 0 whose value *and gradient* are finite at x = 0."""
-    positive = x > 0
-    safe_x = jnp.where(positive, x, 1.0)
-    return jnp.where(positive, safe_x**n, 0.0)
-
-
-def bekker_pressure(
-    sinkage: Float[ArrayLike, "..."],
-    width: Float[ArrayLike, "..."],
-    k_c: Float[ArrayLike, "..."],
-    k_phi: Float[ArrayLike, "..."],
-    n: Float[ArrayLike, "..."],
-) -> Float[Array, "..."]:
-    """Bekker's pressure–sinkage law, eq. (2.1): `p = (k_c / b + k_phi) z^n`.
-
-    **Arguments:**
-
-    - `sinkage`: z [m], clipped at 0 (no pressure above the surface).
-    - `width`: b, the smaller dimension of the contact patch (plate width or radius
-      convention of the test) [m].
-    - `k_c`: cohesive modulus [N/m^(n+1)].
-    - `k_phi`: frictional modulus [N/m^(n+2)].
-    - `n`: sinkage exponent [-].
-
-    **Returns:** pressure p [Pa].
-    """
-    z = _clip_negative(sinkage)
-    return (jnp.asarray(k_c) / jnp.asarray(width) + k_phi) * _safe_power(z, jnp.asarray(n))
-
-
-def wong_sinkage(
-    pressure: Float[ArrayLike, "..."],
-    p_w: Float[ArrayLike, "..."],
-    z_w: Float[ArrayLike, "..."],
-) -> Float[Array, "..."]:
-    """Wong's pressure–sinkage law for shallow snow, eq. (2.2) / (4.1a).
-
-    `z = z_w [1 - exp(-sigma / p_w)]`.
-
-    **Arguments:**
-
-    - `pressure`: normal pressure sigma [Pa].
-    - `p_w`: Wong's pressure parameter, a third of the pressure at which z = 0.95 z_w [Pa].
-    - `z_w`: asymptotic sinkage, roughly the depth of the ice layer or frozen base [m].
-
-    **Returns:** sinkage z [m], in [0, z_w).
-    """
-    return -jnp.asarray(z_w) * jnp.expm1(-jnp.asarray(pressure) / jnp.asarray(p_w))
-
-
-def wong_pressure(
-    sinkage: Float[ArrayLike, "..."],
-    p_w: Float[ArrayLike, "..."],
-    z_w: Float[ArrayLike, "..."],
-) -> Float[Array, "..."]:
-    """Inverse of Wong's law, eq. (2.3) / (4.1b): `sigma = -p_w ln(1 - z / z_w)`.
-
-    **Arguments:**
-
-    - `sinkage`: z [m]; negative values are clipped to 0.
-    - `p_w`: Wong's pressure parameter [Pa].
-    - `z_w`: asymptotic sinkage [m].
-
-    **Returns:** normal pressure sigma [Pa].  It diverges logarithmically as z -> z_w;
-    for z >= z_w (the plate stands on the base) the result is `+inf`, never NaN.
-    """
-    z = _clip_negative(sinkage)
-    z_w = jnp.asarray(z_w)
-    ratio = z / z_w
-    below = ratio < 1.0
-    safe = jnp.where(below, ratio, 0.0)
-    return jnp.where(below, -jnp.asarray(p_w) * jnp.log1p(-safe), jnp.inf)
-
-
-def reece_pressure(
-    sinkage: Float[ArrayLike, "..."],
-    width: Float[ArrayLike, "..."],
-    cohesion: Float[ArrayLike, "..."],
-    unit_weight: Float[ArrayLike, "..."],
-    k_c_prime: Float[ArrayLike, "..."],
-    k_phi_prime: Float[ArrayLike, "..."],
-    n: Float[ArrayLike, "..."],
-) -> Float[Array, "..."]:
-    """Reece's pressure–sinkage law, eq. (2.4).
-
-    `sigma = (c k'_c + gamma_s b k'_phi) (z / b)^n`.
-
-    **Arguments:**
-
-    - `sinkage`: z [m], clipped at 0.
-    - `width`: b, smaller dimension of the plate or contact patch [m].
-    - `cohesion`: c [Pa].
-    - `unit_weight`: gamma_s, weight density of the terrain [N/m^3].
-    - `k_c_prime`, `k_phi_prime`: dimensionless Reece moduli [-].
-    - `n`: sinkage exponent [-].
-
-    **Returns:** normal pressure sigma [Pa].
-    """
-    b = jnp.asarray(width)
-    z = _clip_negative(sinkage)
-    modulus = jnp.asarray(cohesion) * k_c_prime + jnp.asarray(unit_weight) * b * k_phi_prime
-    return modulus * _safe_power(z / b, jnp.asarray(n))
+from .bekker import bekker_pressure
 
 
 def mohr_coulomb(
@@ -150,7 +27,6 @@ def mohr_coulomb(
     """
     return jnp.asarray(cohesion) + jnp.asarray(normal_stress) * jnp.asarray(tan_phi)
 
-
 def _signed_mobilisation(x: Array) -> Array:
     """`sign(x) (1 - exp(-|x|))`, written so that value and gradient are finite for all x.
 
@@ -163,7 +39,6 @@ def _signed_mobilisation(x: Array) -> Array:
     # |x| written with `where` so that its derivative is +-1 (never 0) at x = 0.
     magnitude = -jnp.expm1(-jnp.where(positive, x, -x))
     return jnp.where(positive, magnitude, -magnitude)
-
 
 def janosi_hanamoto(
     shear_displacement: Float[ArrayLike, "..."],
@@ -192,7 +67,6 @@ def janosi_hanamoto(
     return strength * _signed_mobilisation(
         jnp.asarray(shear_displacement) / jnp.asarray(shear_modulus)
     )
-
 
 def gawwad_crolla_shear(
     shear_displacement: Float[ArrayLike, "..."],
@@ -223,7 +97,6 @@ def gawwad_crolla_shear(
         tan_phi,
         shear_modulus,
     )
-
 
 def gawwad_crolla_unloading_pressure(
     sinkage: Float[ArrayLike, "..."],

@@ -30,7 +30,6 @@ JAX is imported lazily, inside `run`, and runs in float64.
 
 from __future__ import annotations
 
-import argparse
 import json
 import math
 import pathlib
@@ -232,8 +231,8 @@ def run(args) -> int:
     jax.config.update("jax_enable_x64", True)
     import numpy as np
 
-    from . import _fit
-    from ._params import RigidWheel
+    from .._fit import fit as _fit
+    from .._wheel.geometry import RigidWheel
 
     try:
         if kind == "plate":
@@ -290,9 +289,9 @@ def run(args) -> int:
 
 def _wheel_model(args):
     """(terrain, distribution) of `fit wheel` from its options (start / fixed values)."""
-    from ._cli_sweep import terrain_from_options
-    from ._distribution import WongReece
-    from ._params import WongSnow
+    from .._terrain.wong import WongSnow
+    from .._wheel.distribution import WongReece
+    from .sweep import terrain_from_options
 
     wong_only = {"p_w": args.p_w, "z_w": args.z_w}
     shared = {"cohesion": args.cohesion, "tan_phi": args.tan_phi,

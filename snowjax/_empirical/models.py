@@ -853,7 +853,9 @@ def compare_motion_resistance(
     matplotlib `Figure` (Agg canvas, not shown) of motion resistance and resistance
     coefficient versus load; open markers are outside the stated range.
     """
-    from ._params import BekkerSoil, RigidWheel, WongSnow
+    from .._terrain.bekker import BekkerSoil
+    from .._terrain.wong import WongSnow
+    from .._wheel.geometry import RigidWheel
 
     if loads is None:
         loads = np.linspace(1e3, 8e3, 15)
@@ -938,7 +940,7 @@ _MODEL_LABELS = {
 
 def _find_solve_wheel():
     try:
-        from . import _wheel  # noqa: PLC0415
+        from .._wheel import equilibrium as _wheel  # noqa: PLC0415
     except ImportError:
         return None
     return getattr(_wheel, "solve_wheel", None)

@@ -1,6 +1,6 @@
-"""The `snowjax` command line: `snowjax reproduce | fit | sweep`.
+"""The `snowjax` command line: `snowjax reproduce | fit | sweep | validate`.
 
-Each subcommand lives in its own module (`_cli_<name>.py`) with a `register(subparsers)`
+Each subcommand lives in its own module of this package with a `register(subparsers)`
 function that adds its parser and sets `run`, the function called with the parsed
 arguments (it returns the exit code).  Modules import JAX lazily so `--help` is fast.
 """
@@ -10,10 +10,9 @@ from __future__ import annotations
 import argparse
 import sys
 
-from . import _cli_fit, _cli_reproduce, _cli_sweep
+from . import fit, reproduce, sweep, validate
 
-_SUBCOMMANDS = (_cli_reproduce, _cli_fit, _cli_sweep)
-_SUBCOMMANDS += (__import__(__package__ + "._cli_validate", fromlist=["register"]),)  # issue 16
+_SUBCOMMANDS = (reproduce, fit, sweep, validate)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -109,7 +109,7 @@ class ValidationModel:
 
 
 def _wong_terrain(rows, grid, diameter):
-    from ._params import WongSnow
+    from .._terrain.wong import WongSnow
 
     p_w = np.asarray(grid)[None, :]
     return WongSnow(p_w=p_w, z_w=rows["snow_depth_m"][:, None], cohesion=0.2165 * p_w,
@@ -117,7 +117,7 @@ def _wong_terrain(rows, grid, diameter):
 
 
 def _bekker_terrain(rows, grid, diameter):
-    from ._params import BekkerSoil
+    from .._terrain.bekker import BekkerSoil
 
     lab = BekkerSoil.thesis_lab_snow()
     s = np.asarray(grid)[None, :]
@@ -145,8 +145,8 @@ def wheel_validation_model(
     def evaluate(rows, grid):
         import jax.numpy as jnp
 
-        from ._params import RigidWheel
-        from ._wheel import solve_wheel
+        from .._wheel.equilibrium import solve_wheel
+        from .._wheel.geometry import RigidWheel
 
         diameter = 2 * float(rows["radius_m"][0])
         wheel = RigidWheel(diameter=diameter, width=tyre_width)
@@ -171,14 +171,14 @@ def validation_models(
     *, wheel_load: float = DEFAULT_WHEEL_LOAD, tyre_width: float = DEFAULT_TYRE_WIDTH
 ) -> list[ValidationModel]:
     """The models compared by [`snowjax.validate`][] (see the module docstring)."""
-    from ._crrel import crrel_contact_arc, crrel_wheel
-    from ._empirical import (
+    from .._empirical.crrel import crrel_contact_arc, crrel_wheel
+    from .._empirical.models import (
         bekker_rolling_resistance,
         bekker_wheel_sinkage,
         richmond_resistance,
         van_es_compaction_resistance,
     )
-    from ._params import BekkerSoil
+    from .._terrain.bekker import BekkerSoil
 
     lab = BekkerSoil.thesis_lab_snow()
     w_n, b = wheel_load, tyre_width
@@ -306,7 +306,7 @@ class ValidationResult:
 
 
 def _crrel_examples_check() -> dict[str, np.ndarray]:
-    from ._crrel import crrel_drawbar, crrel_final_density, crrel_sinkage
+    from .._empirical.crrel import crrel_drawbar, crrel_final_density, crrel_sinkage
 
     ex = crrel_95_1_examples()
     weight = M113_WEIGHT_LB * LB_TO_N

@@ -35,10 +35,12 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from ._contact_general import _general_nodes_for, general_contact
-from ._distribution import WongReece
-from ._params import RigidWheel, Terrain, WongSnow
-from ._terrain import _signed_mobilisation
+from .._terrain.base import Terrain
+from .._terrain.shear import _signed_mobilisation
+from .._terrain.wong import WongSnow
+from .distribution import WongReece
+from .general import _general_nodes_for, general_contact
+from .geometry import RigidWheel
 
 ShearModel = Literal["classic", "simplified", "none"]
 SHEAR_MODELS = ("classic", "simplified", "none")
@@ -505,7 +507,7 @@ def contact_forces(
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
-    from ._wheel import _check_model, _is_thesis_path
+    from .equilibrium import _check_model, _is_thesis_path
 
     _check_model(wheel, snow, distribution, shear)
     if _is_thesis_path(snow, distribution):

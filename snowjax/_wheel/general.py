@@ -31,8 +31,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from ._params import LayeredSnow
-from ._terrain import _signed_mobilisation
+from .._terrain.layered import LayeredSnow
+from .._terrain.shear import _signed_mobilisation
 
 # Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
 # README for the measured accuracy.

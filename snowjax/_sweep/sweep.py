@@ -60,12 +60,13 @@ import zipfile
 from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
-import equinox as eqx
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from ._distribution import WongReece
-from ._params import RigidWheel, Terrain
+from .._leaves import _get_path, _module_leaves, _parameter_names, _with_leaves
+from .._terrain.base import Terrain
+from .._wheel.distribution import WongReece
+from .._wheel.geometry import RigidWheel
 
 __all__ = ["sweep", "SweepResult", "load_sweep", "iter_sweep_chunks"]
 
@@ -96,58 +97,12 @@ _BLOCK = 1 << 20  # elements per block when validating or hashing list-mode inpu
 # ---------------------------------------------------------------------------------------
 
 
-def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:
-    """Array leaves of a parameter set by field path, in pytree order.
-
-    Nested parameter sets get dotted paths (`LayeredSnow`: `top.p_w`, ...,
-    `ice_failure_pressure`); static fields are skipped.
-    """
-    out: dict[str, Any] = {}
-    for f in dataclasses.fields(obj):
-        if f.metadata.get("static", False):
-            continue
-        value = getattr(obj, f.name)
-        if isinstance(value, eqx.Module):
-            out.update(_module_leaves(value, f"{prefix}{f.name}."))
-        else:
-            out[f"{prefix}{f.name}"] = value
-    return out
 
 
-def _get_path(obj, path: str):
-    for part in path.split("."):
-        obj = getattr(obj, part)
-    return obj
 
 
-def _with_leaves(obj, values: dict[str, Any]):
-    """`obj` with the leaves at the given field paths replaced (no converters run)."""
-    paths = tuple(values)
-    if not paths:
-        return obj
-    return eqx.tree_at(
-        lambda o: tuple(_get_path(o, p) for p in paths), obj, tuple(values[p] for p in paths)
-    )
 
 
-def _parameter_names(terrain, distribution, reserved=()) -> dict[str, tuple[str, str]]:
-    """Public name -> (owner, field path) of every leaf of a terrain and a distribution.
-
-    The name is the field path (`k_phi`, `top.p_w`, `c1`) unless the same path exists in
-    the other object or among `reserved` names; then it is prefixed with its owner
-    (`terrain.` or `distribution.`).
-    """
-    t_paths = list(_module_leaves(terrain))
-    d_paths = [] if distribution is None else list(_module_leaves(distribution))
-    taken = set(reserved)
-    out: dict[str, tuple[str, str]] = {}
-    for owner, paths, other in (
-        ("terrain", t_paths, d_paths),
-        ("distribution", d_paths, t_paths),
-    ):
-        for p in paths:
-            out[p if p not in other and p not in taken else f"{owner}.{p}"] = (owner, p)
-    return out
 
 
 # ---------------------------------------------------------------------------------------
@@ -396,7 +351,7 @@ def _define(
 
     import snowjax
 
-    from ._wheel import _check_model
+    from .._wheel.equilibrium import _check_model
 
     if shear not in _SHEAR_MODELS:
         raise ValueError(f"sweep: shear must be one of {_SHEAR_MODELS}, got {shear!r}")
@@ -588,7 +543,7 @@ class _Solver:
         """Start solving chunk k (asynchronous dispatch); returns a handle for `result`."""
         import jax.numpy as jnp
 
-        from ._wheel import solve_wheel
+        from .._wheel.equilibrium import solve_wheel
 
         rows = self.d.chunk_inputs(k)
         n = rows["index"].size

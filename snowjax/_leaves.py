@@ -1,0 +1,86 @@
+"""Parameter leaves: the field converter of every parameter set and leaf paths.
+
+Every physical parameter is an array leaf, so parameter sets can be batched (give a leaf
+an array value and it broadcasts against loads and slips), vmapped and differentiated.
+Nested parameter sets (`LayeredSnow`) name their leaves by dotted field path (`top.p_w`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+
+
+def _as_float(x):
+    """Converter for parameter leaves: arrays of a floating dtype, other objects untouched.
+
+    Python ints become the default float type; existing floating arrays keep their dtype,
+    so a float32 parameter set stays float32.  Non-numeric placeholders (None, sentinels
+    used by `jax.vmap` in_axes or `eqx.filter`) pass through unchanged.
+    """
+    if x is None or isinstance(x, jax.ShapeDtypeStruct):
+        return x
+    try:
+        arr = jnp.asarray(x)
+    except TypeError:
+        return x
+    if not jnp.issubdtype(arr.dtype, jnp.floating):
+        arr = arr.astype(jnp.result_type(float))
+    return arr
+
+def _leaf():
+    return eqx.field(converter=_as_float)
+
+def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:
+    """Array leaves of a parameter set by field path, in pytree order.
+
+    Nested parameter sets get dotted paths (`LayeredSnow`: `top.p_w`, ...,
+    `ice_failure_pressure`); static fields are skipped.
+    """
+    out: dict[str, Any] = {}
+    for f in dataclasses.fields(obj):
+        if f.metadata.get("static", False):
+            continue
+        value = getattr(obj, f.name)
+        if isinstance(value, eqx.Module):
+            out.update(_module_leaves(value, f"{prefix}{f.name}."))
+        else:
+            out[f"{prefix}{f.name}"] = value
+    return out
+
+def _get_path(obj, path: str):
+    for part in path.split("."):
+        obj = getattr(obj, part)
+    return obj
+
+def _with_leaves(obj, values: dict[str, Any]):
+    """`obj` with the leaves at the given field paths replaced (no converters run)."""
+    paths = tuple(values)
+    if not paths:
+        return obj
+    return eqx.tree_at(
+        lambda o: tuple(_get_path(o, p) for p in paths), obj, tuple(values[p] for p in paths)
+    )
+
+def _parameter_names(terrain, distribution, reserved=()) -> dict[str, tuple[str, str]]:
+    """Public name -> (owner, field path) of every leaf of a terrain and a distribution.
+
+    The name is the field path (`k_phi`, `top.p_w`, `c1`) unless the same path exists in
+    the other object or among `reserved` names; then it is prefixed with its owner
+    (`terrain.` or `distribution.`).
+    """
+    t_paths = list(_module_leaves(terrain))
+    d_paths = [] if distribution is None else list(_module_leaves(distribution))
+    taken = set(reserved)
+    out: dict[str, tuple[str, str]] = {}
+    for owner, paths, other in (
+        ("terrain", t_paths, d_paths),
+        ("distribution", d_paths, t_paths),
+    ):
+        for p in paths:
+            out[p if p not in other and p not in taken else f"{owner}.{p}"] = (owner, p)
+    return out

@@ -1,0 +1,4 @@
+"""Longitudinal vehicle simulation on snow.
+
+Private: the public API is `snowjax.X`.
+"""

@@ -1,0 +1,125 @@
+"""Layered snow: two Wong snow layers separated by an ice layer that fails, on a hard base.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import equinox as eqx
+import jax.numpy as jnp
+from jaxtyping import Array, Float
+
+from .._constants import (
+    THESIS_DIAMETER,
+)
+from .._leaves import _leaf
+from .base import Terrain
+from .wong import WongSnow, wong_pressure
+
+
+class LayeredSnow(Terrain):
+    """A snow cover with an ice layer between two snow layers on a hard base.
+
+    Wong & Preston-Thomas (1983, J. Terramechanics 20(1):1-12; thesis section 2.1.2)
+    measured plate pressure–sinkage curves in snow with an ice layer about 10 cm deep:
+    the pressure rises as the snow above the ice compacts, climbs steeply as the
+    deformation zone reaches the ice, drops suddenly when the ice breaks, then rises
+    again towards the asymptote of the frozen ground.  They describe the curve *before
+    as well as after* the failure of the ice layer by Wong's law (2.2/2.3), with z_w
+    the depth of the ice layer before failure and that of the frozen ground after it.
+    This class implements exactly that, in the total sinkage z:
+
+    - before failure, z < z_f: `sigma = -top.p_w ln(1 - z / top.z_w)` (top.z_w = depth
+      of the ice layer);
+    - the ice fails when sigma reaches `ice_failure_pressure` p_f, i.e. at
+      `z_f = top.z_w (1 - exp(-p_f / top.p_w))`;
+    - after failure, z >= z_f: `sigma = -bottom.p_w ln(1 - z / bottom.z_w)`
+      (bottom.z_w = depth of the frozen ground, the base).  The pressure drops from p_f
+      to `-bottom.p_w ln(1 - z_f / bottom.z_w)` at z_f and then rises to the base
+      asymptote.
+
+    The shear strength and modulus are those of `top` before failure and of `bottom`
+    after it.  On a rolling wheel every soil element under the front of the rim is
+    loaded monotonically, so a law in z alone is the loading path of each element.
+    Because the pressure drops, the wheel's vertical load W(theta0) need not be
+    monotone; `solve_wheel` then returns the shallowest equilibrium (the sinkage a wheel
+    reaches when lowered from the surface).
+
+    **Fields:** `top`, `bottom`: `WongSnow` parameter sets of the two layers
+    (top.z_w < bottom.z_w, both measured from the surface [m]); `ice_failure_pressure`:
+    p_f, the pressure at which the ice layer breaks [Pa].
+    """
+
+    top: WongSnow
+    bottom: WongSnow
+    ice_failure_pressure: Float[Array, "..."] = _leaf()
+
+    label: ClassVar[str] = "snow"
+
+    @property
+    def failure_sinkage(self) -> Array:
+        """z_f = top.z_w (1 - exp(-p_f / top.p_w)): sinkage at which the ice breaks [m]."""
+        return -self.top.z_w * jnp.expm1(-self.ice_failure_pressure / self.top.p_w)
+
+    def pressure(self, sinkage, width=None):
+        """Normal stress [Pa] at sinkage z [m] (see the class docstring); `width` unused."""
+        return self.rim_properties(sinkage, width)[0]
+
+    def rim_properties(self, sinkage, width=None):
+        z = jnp.asarray(sinkage)
+        before = z < self.failure_sinkage
+        sigma = jnp.where(
+            before,
+            wong_pressure(jnp.where(before, z, 0.0), self.top.p_w, self.top.z_w),
+            wong_pressure(z, self.bottom.p_w, self.bottom.z_w),
+        )
+        pick = lambda a, b: jnp.where(before, a, b)  # noqa: E731
+        return (
+            sigma,
+            pick(self.top.cohesion, self.bottom.cohesion),
+            pick(self.top.tan_phi, self.bottom.tan_phi),
+            pick(self.top.shear_modulus, self.bottom.shear_modulus),
+        )
+
+    @property
+    def depth(self) -> Array:
+        """bottom.z_w: depth of the frozen ground [m]."""
+        return self.bottom.z_w
+
+    def constraints(self, shear: str = "classic"):
+        rules = [
+            (f"{part}.{name}", value, ok, allowed)
+            for part, layer in (("top", self.top), ("bottom", self.bottom))
+            for name, value, ok, allowed in WongSnow.constraints(layer, shear)
+        ]
+        rules.append(
+            ("bottom.z_w", self.bottom.z_w, self.bottom.z_w > self.top.z_w, "> top.z_w (m)")
+        )
+        rules.append(
+            ("ice_failure_pressure", self.ice_failure_pressure, self.ice_failure_pressure > 0,
+             "> 0 Pa")
+        )
+        return rules
+
+    @classmethod
+    def reference(cls) -> "LayeredSnow":
+        return cls.ice_layer_example()
+
+    @classmethod
+    def ice_layer_example(cls, diameter: float = THESIS_DIAMETER) -> "LayeredSnow":
+        """Snow with an ice layer 10 cm deep over snow on frozen ground 30 cm deep.
+
+        Modelled on the cover Wong & Preston-Thomas (1983) measured (ice about 10 cm
+        below the surface; thesis section 2.1.2).  Their fitted values are not in the
+        thesis, so both layers take the thesis's fresh-snow strength ratios
+        (`WongSnow.thesis_fresh_snow`): top p_w 30 kPa, z_w 0.10 m; bottom p_w 40 kPa,
+        z_w 0.30 m; the ice breaks at 60 kPa (z_f = 8.65 cm, where the pressure drops
+        to 13.6 kPa).  An illustrative cover for the wheel, not a measured one.
+
+        **Arguments:** `diameter`: wheel diameter the shear-modulus ratio refers to [m].
+        """
+        top = WongSnow.thesis_fresh_snow(diameter=diameter, p_w=30e3)
+        bottom = WongSnow.thesis_fresh_snow(diameter=diameter, p_w=40e3)
+        top = eqx.tree_at(lambda s: s.z_w, top, jnp.asarray(0.10))
+        bottom = eqx.tree_at(lambda s: s.z_w, bottom, jnp.asarray(0.30))
+        return cls(top=top, bottom=bottom, ice_failure_pressure=60e3)

@@ -1,0 +1,159 @@
+"""Wong's pressure–sinkage law for shallow snow on a hard base (eq. 2.3 / 4.1) and `WongSnow`.
+"""
+
+from __future__ import annotations
+
+from typing import ClassVar
+
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+from .._constants import (
+    PLATE_RULE_P_W,
+    THESIS_DIAMETER,
+    THESIS_P_W,
+)
+from .._leaves import _leaf
+from .base import Terrain, _clip_negative
+
+
+def wong_sinkage(
+    pressure: Float[ArrayLike, "..."],
+    p_w: Float[ArrayLike, "..."],
+    z_w: Float[ArrayLike, "..."],
+) -> Float[Array, "..."]:
+    """Wong's pressure–sinkage law for shallow snow, eq. (2.2) / (4.1a).
+
+    `z = z_w [1 - exp(-sigma / p_w)]`.
+
+    **Arguments:**
+
+    - `pressure`: normal pressure sigma [Pa].
+    - `p_w`: Wong's pressure parameter, a third of the pressure at which z = 0.95 z_w [Pa].
+    - `z_w`: asymptotic sinkage, roughly the depth of the ice layer or frozen base [m].
+
+    **Returns:** sinkage z [m], in [0, z_w).
+    """
+    return -jnp.asarray(z_w) * jnp.expm1(-jnp.asarray(pressure) / jnp.asarray(p_w))
+
+def wong_pressure(
+    sinkage: Float[ArrayLike, "..."],
+    p_w: Float[ArrayLike, "..."],
+    z_w: Float[ArrayLike, "..."],
+) -> Float[Array, "..."]:
+    """Inverse of Wong's law, eq. (2.3) / (4.1b): `sigma = -p_w ln(1 - z / z_w)`.
+
+    **Arguments:**
+
+    - `sinkage`: z [m]; negative values are clipped to 0.
+    - `p_w`: Wong's pressure parameter [Pa].
+    - `z_w`: asymptotic sinkage [m].
+
+    **Returns:** normal pressure sigma [Pa].  It diverges logarithmically as z -> z_w;
+    for z >= z_w (the plate stands on the base) the result is `+inf`, never NaN.
+    """
+    z = _clip_negative(sinkage)
+    z_w = jnp.asarray(z_w)
+    ratio = z / z_w
+    below = ratio < 1.0
+    safe = jnp.where(below, ratio, 0.0)
+    return jnp.where(below, -jnp.asarray(p_w) * jnp.log1p(-safe), jnp.inf)
+
+class WongSnow(Terrain):
+    """Shallow snow described by Wong's pressure–sinkage law and Mohr–Coulomb shear.
+
+    Pressure–sinkage: `sigma = -p_w ln(1 - z / z_w)` (eq. 2.3 / 4.1); shear strength
+    `c + sigma tan(phi)` (eq. 2.5) mobilised with shear displacement over the modulus K
+    (eq. 4.11).
+
+    **Fields** (array leaves, broadcast against each other and against load and slip):
+
+    - `p_w`: Wong's pressure parameter, a third of the pressure at z = 0.95 z_w [Pa].
+    - `z_w`: asymptotic sinkage: depth of the ice layer or frozen base [m].
+    - `cohesion`: c [Pa].
+    - `tan_phi`: tangent of the internal friction angle [-].
+    - `shear_modulus`: K, the shear deformation modulus of eq. (4.11) [m].
+    """
+
+    p_w: Float[Array, "..."] = _leaf()
+    z_w: Float[Array, "..."] = _leaf()
+    cohesion: Float[Array, "..."] = _leaf()
+    tan_phi: Float[Array, "..."] = _leaf()
+    shear_modulus: Float[Array, "..."] = _leaf()
+
+    label: ClassVar[str] = "snow"
+
+    def pressure(self, sinkage, width=None):
+        """Wong's law (2.3 / 4.1b), `sigma = -p_w ln(1 - z / z_w)` [Pa]; `width` unused."""
+        return wong_pressure(sinkage, self.p_w, self.z_w)
+
+    @property
+    def depth(self) -> Array:
+        """z_w: the asymptotic sinkage, the depth of the ice layer or frozen base [m]."""
+        return self.z_w
+
+    def constraints(self, shear: str = "classic"):
+        if shear == "simplified":  # the simplified model is normalised by c
+            cohesion = ("cohesion", self.cohesion, self.cohesion > 0,
+                        "> 0 Pa (the simplified model is normalised by c)")
+        else:
+            cohesion = ("cohesion", self.cohesion, self.cohesion >= 0, ">= 0 Pa")
+        return [
+            ("p_w", self.p_w, self.p_w > 0, "> 0 Pa"),
+            ("z_w", self.z_w, self.z_w > 0, "> 0 m"),
+            cohesion,
+            ("tan_phi", self.tan_phi, self.tan_phi >= 0, ">= 0"),
+            ("shear_modulus", self.shear_modulus, self.shear_modulus > 0, "> 0 m"),
+        ]
+
+    @classmethod
+    def reference(cls) -> "WongSnow":
+        return cls.thesis_fresh_snow()
+
+    @classmethod
+    def thesis_fresh_snow(
+        cls, diameter: float = THESIS_DIAMETER, p_w: float = THESIS_P_W
+    ) -> "WongSnow":
+        """Fresh shallow snow of the thesis, Table 4.1, scaled to a wheel of `diameter`.
+
+        Table 4.1 gives only ratios: z_w / D = 0.2717, c / p_w = 0.2165,
+        u_k = D / K = 73.6 and tan(phi) = 0.0787, for D = 0.736 m.  So z_w = 0.200 m,
+        K = 10.0 mm, and c = 0.2165 p_w.
+
+        The thesis does not give p_w.  Its Table 4.1 entry angle, 53.6747 deg, is exactly
+        the sinkage z0 = 0.150 m = 0.75 z_w; the default p_w = 85.55 kPa makes that the
+        no-shear equilibrium (4.14) of the 0.736 m x 0.235 m tyre at 5 kN, the middle of
+        the thesis's FEA load range (3.5-7.5 kN).  Then c = 18.5 kPa.  (Wong's plate rule,
+        p_w = a third of the pressure at z = 0.95 z_w, applied to the thesis's plate data
+        of Table 2.1 would give 12.9 kPa — see `thesis_plate_rule_snow` — but a 0.2 m
+        layer with that p_w carries only 2.2 kN under this tyre, less than every FEA
+        load.)  Override with `p_w=...`; the cohesion follows the thesis
+        ratio.
+
+        **Arguments:**
+
+        - `diameter`: wheel diameter D the ratios refer to [m] (default 0.736 m).
+        - `p_w`: Wong's pressure parameter [Pa] (default 85.55 kPa, `THESIS_P_W`).
+        """
+        return cls(
+            p_w=p_w,
+            z_w=0.2717 * diameter,
+            cohesion=0.2165 * p_w,
+            tan_phi=0.0787,
+            shear_modulus=diameter / 73.6,
+        )
+
+
+    @classmethod
+    def thesis_plate_rule_snow(cls, diameter: float = THESIS_DIAMETER) -> "WongSnow":
+        """The thesis's fresh snow (Table 4.1 ratios) with p_w from Wong's plate rule.
+
+        p_w = 12.92 kPa is a third of the pressure that the thesis's own plate test of
+        the same fresh snow (Table 2.1) reaches at z = 0.95 z_w = 0.190 m (38.77 kPa,
+        interpolated between rows 17 and 18); c = 0.2165 p_w = 2.80 kPa, z_w = 0.2717 D,
+        K = D / 73.6, tan phi = 0.0787.  A softer snow than `thesis_fresh_snow`: a
+        0.736 m x 0.235 m wheel bottoms out above about 2.2 kN.
+
+        **Arguments:** `diameter`: the wheel diameter D the ratios refer to [m].
+        """
+        return cls.thesis_fresh_snow(diameter=diameter, p_w=PLATE_RULE_P_W)

@@ -1,0 +1,4 @@
+"""The tyre shear-force model of chapter 3.
+
+Private: the public API is `snowjax.X`.
+"""

@@ -1,0 +1,4 @@
+"""Validation of the models against measured snow data.
+
+Private: the public API is `snowjax.X`.
+"""
