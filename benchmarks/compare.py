@@ -71,10 +71,18 @@ def measure() -> dict[str, float]:
 
 def _run_tree(tree: pathlib.Path) -> dict[str, float]:
     env = dict(os.environ, PYTHONPATH=str(tree), JAX_PLATFORMS="cpu")
-    code = f"import sys, json; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); " \
-           "import compare; print(json.dumps(compare.measure()))"
-    res = subprocess.run([sys.executable, "-c", code], env=env, cwd=tempfile.gettempdir(),
-                         capture_output=True, text=True, check=True)
+    code = (
+        f"import sys, json; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); "
+        "import compare; print(json.dumps(compare.measure()))"
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", code],
+        env=env,
+        cwd=tempfile.gettempdir(),
+        capture_output=True,
+        text=True,
+        check=True,
+    )
     out = json.loads(res.stdout.strip().splitlines()[-1])
     assert out.pop("snowjax").startswith(str(tree)), "measured the wrong snowjax"
     return out
@@ -96,8 +104,13 @@ def main(argv=None) -> None:
     args = parser.parse_args(argv)
 
     def rev(name):
-        return subprocess.run(["git", "rev-parse", "--short", name], cwd=ROOT,
-                              capture_output=True, text=True, check=True).stdout.strip()
+        return subprocess.run(
+            ["git", "rev-parse", "--short", name],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
 
     old_rev = rev(args.revision)
     new_rev = rev(args.new) if args.new else f"working tree at {rev('HEAD')}"
@@ -107,8 +120,12 @@ def main(argv=None) -> None:
         if args.new:
             trees["new"], revs["new"] = pathlib.Path(tmp) / "new", new_rev
         for label, rev_ in revs.items():
-            subprocess.run(["git", "worktree", "add", "--detach", str(trees[label]), rev_],
-                           cwd=ROOT, capture_output=True, check=True)
+            subprocess.run(
+                ["git", "worktree", "add", "--detach", str(trees[label]), rev_],
+                cwd=ROOT,
+                capture_output=True,
+                check=True,
+            )
         try:
             best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
             for r in range(args.rounds):
@@ -118,8 +135,11 @@ def main(argv=None) -> None:
                 print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
         finally:
             for label in revs:
-                subprocess.run(["git", "worktree", "remove", "--force", str(trees[label])],
-                               cwd=ROOT, capture_output=True)
+                subprocess.run(
+                    ["git", "worktree", "remove", "--force", str(trees[label])],
+                    cwd=ROOT,
+                    capture_output=True,
+                )
 
     lines = [
         f"Old: {old_rev}; new: {new_rev}. Best of {args.rounds} interleaved "

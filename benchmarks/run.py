@@ -140,15 +140,38 @@ def scipy_reference(n_points):
     from tests import reference as ref  # noqa: PLC0415
 
     load, slip = inputs(n_points, seed=1)
-    p = dict(D=0.736, b=0.235, p_w=float(SNOW.p_w), z_w=float(SNOW.z_w), c=float(SNOW.cohesion),
-             tan_phi=float(SNOW.tan_phi), K=float(SNOW.shear_modulus))
+    p = dict(
+        D=0.736,
+        b=0.235,
+        p_w=float(SNOW.p_w),
+        z_w=float(SNOW.z_w),
+        c=float(SNOW.cohesion),
+        tan_phi=float(SNOW.tan_phi),
+        K=float(SNOW.shear_modulus),
+    )
     t = time.perf_counter()
-    out = [ref.solve(load[k], slip[k], p["D"], p["b"], p["p_w"], p["z_w"], p["c"], p["tan_phi"],
-                     p["K"], "classic") for k in range(n_points)]
+    out = [
+        ref.solve(
+            load[k],
+            slip[k],
+            p["D"],
+            p["b"],
+            p["p_w"],
+            p["z_w"],
+            p["c"],
+            p["tan_phi"],
+            p["K"],
+            "classic",
+        )
+        for k in range(n_points)
+    ]
     per_point = (time.perf_counter() - t) / n_points
     st = solve(load, slip)
-    err = max(abs(float(st.sinkage[k]) / (0.368 * (1 - np.cos(o[0]))) - 1)
-              for k, o in enumerate(out) if o is not None)
+    err = max(
+        abs(float(st.sinkage[k]) / (0.368 * (1 - np.cos(o[0]))) - 1)
+        for k, o in enumerate(out)
+        if o is not None
+    )
     return per_point, err
 
 
@@ -171,8 +194,10 @@ def machine() -> str:
     except OSError:
         pass
     dev = jax.devices()[0]
-    return (f"{cpu}, {os.cpu_count()} cores, {dev.platform.upper()} ({dev.device_kind}), "
-            f"jax {jax.__version__}, Python {platform.python_version()}")
+    return (
+        f"{cpu}, {os.cpu_count()} cores, {dev.platform.upper()} ({dev.device_kind}), "
+        f"jax {jax.__version__}, Python {platform.python_version()}"
+    )
 
 
 def main(argv=None):
@@ -188,7 +213,16 @@ def main(argv=None):
     def add(name, value, note=""):
         rows.append((name, value, note))
 
-    steps = ["throughput", "models", "terrains", "float32", "gradient", "compile", "in-step", "scipy"]
+    steps = [
+        "throughput",
+        "models",
+        "terrains",
+        "float32",
+        "gradient",
+        "compile",
+        "in-step",
+        "scipy",
+    ]
     with Progress(console=console, transient=True) as progress:
         task = progress.add_task("benchmarks", total=len(steps) + len(sizes) - 1)
         for n in sizes:
@@ -197,40 +231,66 @@ def main(argv=None):
             add(f"solve_wheel, batch {n:,}", f"{rate:,.0f} /s", f"{t * 1e3:.2f} ms per call")
             progress.advance(task)
         balance = sj.contact_forces(WHEEL, SNOW, st.entry_angle, inputs(sizes[-1])[1]).vertical_load
-        numbers["max_load_balance_error"] = float(np.max(np.abs(np.asarray(balance) / inputs(sizes[-1])[0] - 1)))
+        numbers["max_load_balance_error"] = float(
+            np.max(np.abs(np.asarray(balance) / inputs(sizes[-1])[0] - 1))
+        )
         n_ref = 10_000 if args.quick else 100_000
         for shear in ("simplified", "none"):
             rate, _, _ = throughput(n_ref, shear=shear, repeats=2)
             numbers[f"throughput_{shear}"] = rate
-            add(f"solve_wheel {shear} shear, batch {n_ref:,}", f"{rate:,.0f} /s",
-                f"classic: {numbers[f'throughput_{n_ref}']:,.0f} /s")
+            add(
+                f"solve_wheel {shear} shear, batch {n_ref:,}",
+                f"{rate:,.0f} /s",
+                f"classic: {numbers[f'throughput_{n_ref}']:,.0f} /s",
+            )
         # Every terrain law and the Wong-Reece distribution, same loads and slips, wheel
         # 1.0 m x 0.4 m where the thesis snow's tyre would exceed 85 degrees on Bekker snow.
         load, slip = inputs(n_ref)
         terrains = {
             "WongSnow + Wong-Reece": (SNOW, sj.WongReece(0.43, 0.32), WHEEL, load),
             "BekkerSoil.snow_us, front region": (sj.BekkerSoil.snow_us(), None, WHEEL, load / 9),
-            "BekkerSoil.snow_us + Wong-Reece": (sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32), WHEEL, load / 9),
-            "LayeredSnow.ice_layer_example, front region": (sj.LayeredSnow.ice_layer_example(), None, WHEEL, load / 4),
+            "BekkerSoil.snow_us + Wong-Reece": (
+                sj.BekkerSoil.snow_us(),
+                sj.WongReece(0.43, 0.32),
+                WHEEL,
+                load / 9,
+            ),
+            "LayeredSnow.ice_layer_example, front region": (
+                sj.LayeredSnow.ice_layer_example(),
+                None,
+                WHEEL,
+                load / 4,
+            ),
         }
         for name, (terrain, dist, wheel, ld) in terrains.items():
-            run = lambda: sj.solve_wheel(wheel, terrain, ld, slip, distribution=dist).entry_angle.block_until_ready()  # noqa: E731,B023
+            run = lambda: sj.solve_wheel(
+                wheel, terrain, ld, slip, distribution=dist
+            ).entry_angle.block_until_ready()  # noqa: E731,B023
             run()
             t = best_time(run, 2)
             numbers[f"throughput_{name}"] = n_ref / t
-            add(f"solve_wheel {name}, batch {n_ref:,}", f"{n_ref / t:,.0f} /s",
+            add(
+                f"solve_wheel {name}, batch {n_ref:,}",
+                f"{n_ref / t:,.0f} /s",
                 f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; loads "
-                + ("1-9 kN" if ld is load else f"1-9 kN / {9 if 'Bekker' in name else 4}"))
+                + ("1-9 kN" if ld is load else f"1-9 kN / {9 if 'Bekker' in name else 4}"),
+            )
         progress.advance(task)
         rate32, err32, finite32 = float32_error(n_ref)
         numbers.update(throughput_float32=rate32, float32_sinkage_error=err32)
-        add(f"solve_wheel float32, batch {n_ref:,}", f"{rate32:,.0f} /s",
-            f"max sinkage error vs float64 {err32:.1e}; finite fraction {finite32:.3f}")
+        add(
+            f"solve_wheel float32, batch {n_ref:,}",
+            f"{rate32:,.0f} /s",
+            f"max sinkage error vs float64 {err32:.1e}; finite fraction {finite32:.3f}",
+        )
         progress.advance(task)
         ratio, t_fwd, t_jac = gradient_ratio(n_ref)
         numbers.update(gradient_ratio=ratio)
-        add(f"jacfwd of 3 outputs w.r.t. (p_w, z_w, tan phi), batch {n_ref:,}",
-            f"{ratio:.2f} x forward", f"forward {t_fwd * 1e3:.0f} ms, Jacobian {t_jac * 1e3:.0f} ms")
+        add(
+            f"jacfwd of 3 outputs w.r.t. (p_w, z_w, tan phi), batch {n_ref:,}",
+            f"{ratio:.2f} x forward",
+            f"forward {t_fwd * 1e3:.0f} ms, Jacobian {t_jac * 1e3:.0f} ms",
+        )
         progress.advance(task)
         for shear in ("classic",):
             c = compile_time(shear)
@@ -242,15 +302,21 @@ def main(argv=None):
         add("in-step latency (4 wheels, lax.scan, warm start)", f"{lat * 1e6:.1f} us per wheel", "")
         sim = simulation_step_cost(200 if args.quick else 1000)
         numbers["simulation_us_per_wheel_step"] = sim * 1e6
-        add("simulate_longitudinal, per step", f"{sim * 1e6:.1f} us per wheel",
-            "4 driven wheels, 400 N m each, dt = 10 ms, diffrax")
+        add(
+            "simulate_longitudinal, per step",
+            f"{sim * 1e6:.1f} us per wheel",
+            "4 driven wheels, 400 N m each, dt = 10 ms, diffrax",
+        )
         progress.advance(task)
         n_scipy = 3 if args.quick else 10
         per_point, err = scipy_reference(n_scipy)
         numbers.update(scipy_per_point_s=per_point)
         speedup = numbers[f"throughput_{n_ref}"] * per_point
-        add("SciPy reference (quad + brentq), per point", f"{per_point * 1e3:.0f} ms",
-            f"snowjax batch {n_ref:,} is {speedup:,.0f}x faster; sinkage agrees to {err:.1e}")
+        add(
+            "SciPy reference (quad + brentq), per point",
+            f"{per_point * 1e3:.0f} ms",
+            f"snowjax batch {n_ref:,} is {speedup:,.0f}x faster; sinkage agrees to {err:.1e}",
+        )
         progress.advance(task)
 
     table = Table(title="snowjax benchmarks")
@@ -262,8 +328,12 @@ def main(argv=None):
     where = machine()
     console.print(f"machine: {where}")
     markdown = "\n".join(
-        [f"Measured on: {where} ({time.strftime('%Y-%m-%d')}).", "",
-         "| what | result | notes |", "|---|---|---|"]
+        [
+            f"Measured on: {where} ({time.strftime('%Y-%m-%d')}).",
+            "",
+            "| what | result | notes |",
+            "|---|---|---|",
+        ]
         + [f"| {a} | {b} | {c} |" for a, b, c in rows]
     )
     if args.json:

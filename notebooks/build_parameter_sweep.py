@@ -1,5 +1,7 @@
 """Generate notebooks/parameter_sweep.ipynb (no stored outputs)."""
+
 import sys
+
 import nbformat
 from nbformat.v4 import new_code_cell, new_markdown_cell, new_notebook
 
@@ -110,8 +112,11 @@ with open("sweep-output/sweep.csv") as f:
     first = next(reader)
 print(first)"""),
 ]
-nb = new_notebook(cells=cells, metadata={
-    "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
-    "language_info": {"name": "python"},
-})
+nb = new_notebook(
+    cells=cells,
+    metadata={
+        "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
+        "language_info": {"name": "python"},
+    },
+)
 nbformat.write(nb, sys.argv[1])

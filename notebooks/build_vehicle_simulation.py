@@ -1,4 +1,5 @@
 """Generate notebooks/vehicle_simulation.ipynb (no stored outputs)."""
+
 import sys
 
 import nbformat
@@ -240,8 +241,11 @@ fig.tight_layout()"""),
 * **Other simulators.** `sj.wheel_forces(v, ω, load, wheel, snow)` is the same force
   function as a pure JAX call, for an MJX or Brax step (see its docstring)."""),
 ]
-nb = new_notebook(cells=cells, metadata={
-    "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
-    "language_info": {"name": "python"},
-})
+nb = new_notebook(
+    cells=cells,
+    metadata={
+        "kernelspec": {"display_name": "Python 3", "language": "python", "name": "python3"},
+        "language_info": {"name": "python"},
+    },
+)
 nbformat.write(nb, sys.argv[1])

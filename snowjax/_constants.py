@@ -1,5 +1,4 @@
-"""Values taken from (or derived from) the thesis and shared by several models; SI units.
-"""
+"""Values taken from (or derived from) the thesis and shared by several models; SI units."""
 
 from __future__ import annotations
 

@@ -32,8 +32,10 @@ def _as_float(x):
         arr = arr.astype(jnp.result_type(float))
     return arr
 
+
 def _leaf():
     return eqx.field(converter=_as_float)
+
 
 def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:
     """Array leaves of a parameter set by field path, in pytree order.
@@ -52,10 +54,12 @@ def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:
             out[f"{prefix}{f.name}"] = value
     return out
 
+
 def _get_path(obj, path: str):
     for part in path.split("."):
         obj = getattr(obj, part)
     return obj
+
 
 def _with_leaves(obj, values: dict[str, Any]):
     """`obj` with the leaves at the given field paths replaced (no converters run)."""
@@ -65,6 +69,7 @@ def _with_leaves(obj, values: dict[str, Any]):
     return eqx.tree_at(
         lambda o: tuple(_get_path(o, p) for p in paths), obj, tuple(values[p] for p in paths)
     )
+
 
 def _parameter_names(terrain, distribution, reserved=()) -> dict[str, tuple[str, str]]:
     """Public name -> (owner, field path) of every leaf of a terrain and a distribution.

@@ -36,8 +36,9 @@ def layered(p1, zw1, p2, zw2, p_fail):
     return law, z_f
 
 
-def contact(theta0, slip, D, b, law, c, tan_phi, K, fm=0.0, fr=0.0, shear="classic", z_f=None,
-            lower=None):
+def contact(
+    theta0, slip, D, b, law, c, tan_phi, K, fm=0.0, fr=0.0, shear="classic", z_f=None, lower=None
+):
     """(W, R, T, M) by adaptive quadrature over theta_r .. theta0.
 
     `lower` = (c, tan_phi, K) of the layer below the ice, used past the failure sinkage.
@@ -104,8 +105,23 @@ def contact(theta0, slip, D, b, law, c, tan_phi, K, fm=0.0, fr=0.0, shear="class
     return np.array([w * r * b, rr * r * b, t * r * b, m * r * r * b])
 
 
-def solve(load, slip, D, b, law, c, tan_phi, K, fm=0.0, fr=0.0, shear="classic", z_f=None,
-          depth=math.inf, shallowest=False, lower=None):
+def solve(
+    load,
+    slip,
+    D,
+    b,
+    law,
+    c,
+    tan_phi,
+    K,
+    fm=0.0,
+    fr=0.0,
+    shear="classic",
+    z_f=None,
+    depth=math.inf,
+    shallowest=False,
+    lower=None,
+):
     """theta0 with W(theta0) = load by brentq (the shallowest root if `shallowest`).
 
     theta0 is searched up to 85 degrees, or up to the base at `depth` [m] if shallower.

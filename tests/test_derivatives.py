@@ -67,8 +67,13 @@ def test_constants_and_axle_pressure():
     kk = dv.DimensionlessConstants.from_parameters(
         sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow(), THETA0
     )
-    for name, value in (("z_w_over_d", 0.2717), ("c_over_p_w", 0.2165), ("u_k", 73.6),
-                        ("tan_phi", 0.0787), ("entry_angle", THETA0)):
+    for name, value in (
+        ("z_w_over_d", 0.2717),
+        ("c_over_p_w", 0.2165),
+        ("u_k", 73.6),
+        ("tan_phi", 0.0787),
+        ("entry_angle", THETA0),
+    ):
         assert float(getattr(kk, name)) == pytest.approx(value, rel=1e-12)
 
 
@@ -76,8 +81,12 @@ def test_constants_and_axle_pressure():
 def test_normalized_shear_matches_dimensional_form(model):
     sb = np.linspace(0.0, 0.99 * SIGMA_N0, 31)[:, None]
     f = dv.classic_normalized_shear if model == "classic" else dv.simplified_normalized_shear
-    np.testing.assert_allclose(np.asarray(f(sb, SLIPS[None, :])),
-                               NP_MODELS[model](sb, SLIPS[None, :]), rtol=1e-10, atol=1e-14)
+    np.testing.assert_allclose(
+        np.asarray(f(sb, SLIPS[None, :])),
+        NP_MODELS[model](sb, SLIPS[None, :]),
+        rtol=1e-10,
+        atol=1e-14,
+    )
 
 
 @pytest.mark.parametrize("model", ["classic", "simplified"])
@@ -125,8 +134,12 @@ def test_table_4_3_y2_approximations_are_not_identities():
     # First "≈": dropping T0 T_Δ.  At sigma_bar = 0 that is a few per cent of y2.
     rel0 = np.abs(np.asarray(table.y2_without_t_delta)[0] / auto[0] - 1)
     assert np.all(rel0 > 0.01) and np.all(rel0 < 0.1)
-    np.testing.assert_allclose(np.asarray(table.y2) - np.asarray(table.y2_without_t_delta),
-                               np.asarray(table.t0 * table.t_delta), rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(
+        np.asarray(table.y2) - np.asarray(table.y2_without_t_delta),
+        np.asarray(table.t0 * table.t_delta),
+        rtol=1e-12,
+        atol=1e-15,
+    )
     # Second "≈": -T0²(T1 + T2)² is off by orders of magnitude once exp(-u_k J) < 1.
     j = int(np.argmin(np.abs(sb[:, 0] - 1.0)))
     ratio = np.asarray(table.y2_squared)[j, 1:] / auto[j, 1:]
@@ -157,7 +170,8 @@ def test_table_4_6_y2_at_zero_has_a_sign_error():
         assert printed > 0 > auto  # the printed value has the wrong sign
         assert corrected == pytest.approx(auto, rel=1e-12)
         assert float(dv.thesis_table_4_6(slip)["y1"][0]) == pytest.approx(
-            float(dv.shear_derivatives(0.0, slip, model="simplified").y1), rel=1e-12)
+            float(dv.shear_derivatives(0.0, slip, model="simplified").y1), rel=1e-12
+        )
 
 
 def test_table_4_4_zero_sinkage_values():
@@ -168,7 +182,8 @@ def test_table_4_4_zero_sinkage_values():
         # y1 at sigma_bar = 0 is exact, and equal to the simplified model's tau1 (i + tau2).
         assert float(printed["y1"][0]) == pytest.approx(float(auto.y1), rel=1e-12)
         assert float(auto.y1) == pytest.approx(
-            float(dv.shear_derivatives(0.0, slip, model="simplified").y1), rel=1e-12)
+            float(dv.shear_derivatives(0.0, slip, model="simplified").y1), rel=1e-12
+        )
         # y2 at sigma_bar = 0 as printed keeps only the leading term.
         assert abs(float(printed["y2"][0]) / float(auto.y2) - 1) > 0.005  # 10 % at i = 0
         assert float(exact["y2"][0]) == pytest.approx(float(auto.y2), rel=1e-10)

@@ -65,9 +65,7 @@ def test_brixius_literal_example():
     assert float(out.net_traction) == pytest.approx(-0.214589, abs=2e-6)
 
 
-@pytest.mark.parametrize(
-    "variant, a, c", [("thesis", 0.75, 0.05), ("brixius1987", 7.5, 0.5)]
-)
+@pytest.mark.parametrize("variant, a, c", [("thesis", 0.75, 0.05), ("brixius1987", 7.5, 0.5)])
 def test_brixius_thesis_tyre_hand_values(variant, a, c):
     ci, load, delta, h, s = 450e3, 3500.0, 0.02, 0.17625, 0.15
     n_b = ci * B * D / load * (1 + 5 * delta / h) / (1 + 3 * B / D)
@@ -117,8 +115,13 @@ def test_brixius_broadcasts_and_identities():
 )
 def test_brixius_rejects_bad_input(kwargs, name):
     args = dict(
-        cone_index=300e3, width=B, diameter=D, load=3e3, deflection=0.01,
-        section_height=0.17, slip=0.1,
+        cone_index=300e3,
+        width=B,
+        diameter=D,
+        load=3e3,
+        deflection=0.01,
+        section_height=0.17,
+        slip=0.1,
     )
     args.update(kwargs)
     with pytest.raises(ValueError, match=f"`{name}`"):
@@ -219,9 +222,7 @@ def test_bekker_rolling_lab_snow_hand_values():
     w = 3500.0
     p = (2 * N + 2) / (2 * N + 1)
     m = 1 / (2 * N + 1)
-    expected = (3 * w / math.sqrt(D)) ** p / (
-        (3 - N) ** p * (N + 1) * B**m * (KC / B + KPHI) ** m
-    )
+    expected = (3 * w / math.sqrt(D)) ** p / ((3 - N) ** p * (N + 1) * B**m * (KC / B + KPHI) ** m)
     z0 = (3 * w / ((3 - N) * (KC + B * KPHI) * math.sqrt(D))) ** (2 / (2 * N + 1))
     assert float(sj.bekker_rolling_resistance(w, D, B, KC, KPHI, N)) == pytest.approx(
         expected, rel=1e-13
@@ -244,9 +245,7 @@ def test_bekker_closed_form_equals_compaction_at_rigid_wheel_sinkage(
 ):
     """(2.25) == (2.24) at z0 = [3W / ((3 - n)(k_c + b k_phi) sqrt(D))]^(2/(2n+1))."""
     assume(k_c + width * k_phi > 1e-3 * width * k_phi)
-    z0 = (3 * load / ((3 - n) * (k_c + width * k_phi) * math.sqrt(diameter))) ** (
-        2 / (2 * n + 1)
-    )
+    z0 = (3 * load / ((3 - n) * (k_c + width * k_phi) * math.sqrt(diameter))) ** (2 / (2 * n + 1))
     closed = float(sj.bekker_rolling_resistance(load, diameter, width, k_c, k_phi, n))
     from_sinkage = float(sj.bekker_compaction_resistance(z0, width, k_c, k_phi, n))
     assert closed == pytest.approx(from_sinkage, rel=1e-10)
@@ -342,7 +341,10 @@ def test_van_es_small_compaction_is_accurate():
 )
 def test_van_es_rejects_bad_input(kwargs, name):
     args = dict(
-        width=0.235, snow_depth=0.2, initial_density=200.0, final_density=400.0,
+        width=0.235,
+        snow_depth=0.2,
+        initial_density=200.0,
+        final_density=400.0,
         ice_pressure=4e5,
     )
     args.update(kwargs)
@@ -432,7 +434,8 @@ def test_jit_and_vmap_agree_with_eager():
     np.testing.assert_allclose(mapped, eager, rtol=1e-14)
     mu = jax.jit(lambda w: sj.brixius(300e3, B, D, w, 0.01, 0.17, 0.3))(loads)
     np.testing.assert_allclose(
-        mu.motion_resistance, sj.brixius(300e3, B, D, loads, 0.01, 0.17, 0.3).motion_resistance,
+        mu.motion_resistance,
+        sj.brixius(300e3, B, D, loads, 0.01, 0.17, 0.3).motion_resistance,
         rtol=1e-14,
     )
 

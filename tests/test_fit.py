@@ -62,7 +62,9 @@ def test_table_2_1_package_data_is_the_thesis_table():
 
 def test_table_2_1_bekker_fit_reproduces_the_thesis():
     d = sj.thesis_plate_test()
-    res = sj.fit_plate_sinkage(d["sinkage"], d["pressure"], law="bekker", plate_size=d["plate_size"])
+    res = sj.fit_plate_sinkage(
+        d["sinkage"], d["pressure"], law="bekker", plate_size=d["plate_size"]
+    )
     # Measured: n = 1.0707148, k_eq = 233755.2 N/m^(n+2) (std. errors 0.056 and 24.8 kN).
     # Thesis (section 2.1.1): n = 1.0707148 -- the same to all 8 printed digits -- and
     # k_c/b + k_phi = 3.43/0.23 + 218.84215 = 233.75519 kN/m^(n+2) with b = 0.23 m, the
@@ -81,14 +83,20 @@ def test_table_2_1_bekker_fit_reproduces_the_thesis():
     assert any("identifiable" in w and "k_c" in w for w in res.warnings)
 
     # Independent: scipy's curve_fit on the same model and data (Pa, m).
-    popt, pcov = curve_fit(lambda z, k, n: k * z**n, d["sinkage"], d["pressure"], p0=[2e5, 1.0], **TIGHT)
+    popt, pcov = curve_fit(
+        lambda z, k, n: k * z**n, d["sinkage"], d["pressure"], p0=[2e5, 1.0], **TIGHT
+    )
     assert res.params["k_eq"] == pytest.approx(popt[0], rel=1e-7)
     assert res.params["n"] == pytest.approx(popt[1], rel=1e-7)
     # Gauss-Newton standard errors (curve_fit scales pcov by SSE/(m-p) as we do).
-    np.testing.assert_allclose([res.stderr["k_eq"], res.stderr["n"]], np.sqrt(np.diag(pcov)), rtol=1e-5)
+    np.testing.assert_allclose(
+        [res.stderr["k_eq"], res.stderr["n"]], np.sqrt(np.diag(pcov)), rtol=1e-5
+    )
     rho = pcov[0, 1] / math.sqrt(pcov[0, 0] * pcov[1, 1])
     assert res.correlation[0, 1] == pytest.approx(rho, abs=1e-6)
-    assert res.sse == pytest.approx(np.sum((popt[0] * d["sinkage"] ** popt[1] - d["pressure"]) ** 2), rel=1e-9)
+    assert res.sse == pytest.approx(
+        np.sum((popt[0] * d["sinkage"] ** popt[1] - d["pressure"]) ** 2), rel=1e-9
+    )
     assert res.dof == 18 and res.residuals.shape == (20,)
 
 
@@ -111,7 +119,9 @@ def test_bekker_two_plate_sizes_separates_k_c_and_k_phi():
     popt, pcov = curve_fit(model, (z, b), p, p0=[1e3, 1e5, 1.5], **TIGHT)
     got = [res.params[k] for k in ("k_c", "k_phi", "n")]
     np.testing.assert_allclose(got, popt, rtol=1e-6)
-    np.testing.assert_allclose([res.stderr[k] for k in ("k_c", "k_phi", "n")], np.sqrt(np.diag(pcov)), rtol=1e-4)
+    np.testing.assert_allclose(
+        [res.stderr[k] for k in ("k_c", "k_phi", "n")], np.sqrt(np.diag(pcov)), rtol=1e-4
+    )
     # k_eq at the smaller plate, and its delta-method error from curve_fit's covariance.
     bref = 0.05
     grad = np.array([1 / bref, 1.0, 0.0])
@@ -129,9 +139,13 @@ def test_wong_fit_matches_scipy():
     p = -p_w * np.log1p(-z / z_w) * (1 + 0.01 * rng.standard_normal(15))
     res = sj.fit_plate_sinkage(z, p, "wong")
     with np.errstate(invalid="ignore"):  # scipy's trial steps may cross z_w < z
-        popt, pcov = curve_fit(lambda zz, a, c: -a * np.log1p(-zz / c), z, p, p0=[1e4, 0.3], **TIGHT)
+        popt, pcov = curve_fit(
+            lambda zz, a, c: -a * np.log1p(-zz / c), z, p, p0=[1e4, 0.3], **TIGHT
+        )
     np.testing.assert_allclose([res.params["p_w"], res.params["z_w"]], popt, rtol=1e-6)
-    np.testing.assert_allclose([res.stderr["p_w"], res.stderr["z_w"]], np.sqrt(np.diag(pcov)), rtol=1e-4)
+    np.testing.assert_allclose(
+        [res.stderr["p_w"], res.stderr["z_w"]], np.sqrt(np.diag(pcov)), rtol=1e-4
+    )
     assert res.units == {"p_w": "Pa", "z_w": "m"}
     assert abs(res.params["z_w"] - z_w) < 3 * res.stderr["z_w"]
 
@@ -221,7 +235,20 @@ def test_table_3_2_fit_reproduces_the_published_coefficients(tire_fit):
     res = tire_fit
     assert res.success
     # Equation order (3.17)-(3.21).
-    assert list(res.params) == ["A4", "A5", "B4", "B5", "A1", "A2", "A3", "B1", "B2", "B3", "a1", "a2"]
+    assert list(res.params) == [
+        "A4",
+        "A5",
+        "B4",
+        "B5",
+        "A1",
+        "A2",
+        "A3",
+        "B1",
+        "B2",
+        "B3",
+        "a1",
+        "a2",
+    ]
     for name, (value, half_digit) in THESIS_COEFFS.items():
         if name == "A3":
             assert res.params[name] == pytest.approx(value, rel=1e-4)
@@ -245,7 +272,9 @@ def test_table_3_2_fit_matches_scipy_with_standard_errors(tire_fit):
     def check(model, col, names, p0):
         popt, pcov = curve_fit(model, f, THESIS_TABLE_3_2[:, col], p0=p0, **TIGHT)
         np.testing.assert_allclose([res.params[n] for n in names], popt, rtol=1e-6, atol=1e-12)
-        np.testing.assert_allclose([res.stderr[n] for n in names], np.sqrt(np.diag(pcov)), rtol=1e-4)
+        np.testing.assert_allclose(
+            [res.stderr[n] for n in names], np.sqrt(np.diag(pcov)), rtol=1e-4
+        )
 
     hyperbola = lambda x, a, b: x / (a + b * x)  # noqa: E731
     quadratic = lambda x, a, b, c: a + b * x + c * x**2  # noqa: E731
@@ -255,7 +284,11 @@ def test_table_3_2_fit_matches_scipy_with_standard_errors(tire_fit):
     check(quadratic, 4, ["B1", "B2", "B3"], [0.4, 0.0, 0.0])
     # (3.21) with a1 at its bound 0: one free coefficient, a2.
     popt, pcov = curve_fit(
-        lambda x, a2: 0.5 * (1 - np.exp(-(a2**2) * x**2)), f, THESIS_TABLE_3_2[:, 5], p0=[0.1], **TIGHT
+        lambda x, a2: 0.5 * (1 - np.exp(-(a2**2) * x**2)),
+        f,
+        THESIS_TABLE_3_2[:, 5],
+        p0=[0.1],
+        **TIGHT,
     )
     assert res.params["a2"] == pytest.approx(popt[0], rel=1e-6)
     assert res.stderr["a2"] == pytest.approx(math.sqrt(pcov[0, 0]), rel=1e-4)
@@ -264,7 +297,11 @@ def test_table_3_2_fit_matches_scipy_with_standard_errors(tire_fit):
     assert any("a1 is degenerate" in w for w in res.warnings)
     # Unconstrained, E1 wants a1^2 < 0 (scipy, free in a1^2 and a2^2):
     qopt, _ = curve_fit(
-        lambda x, q1, q2: 0.5 * (1 - np.exp(-q1 * x - q2 * x**2)), f, THESIS_TABLE_3_2[:, 5], p0=[0.0, 0.01], **TIGHT
+        lambda x, q1, q2: 0.5 * (1 - np.exp(-q1 * x - q2 * x**2)),
+        f,
+        THESIS_TABLE_3_2[:, 5],
+        p0=[0.0, 0.01],
+        **TIGHT,
     )
     assert qopt[0] < 0
     # The polynomial coefficients are strongly correlated on 3.5-7.5 kN; A3 is not
@@ -309,7 +346,10 @@ def _snow(**kw):
 # shapes; cheaper XLA settings halve that compile time and change no arithmetic.
 _solve = jax.jit(
     lambda snow, loads, slips: sj.solve_wheel(WHEEL, snow, loads, slips),
-    compiler_options={"xla_backend_optimization_level": 0, "xla_llvm_disable_expensive_passes": True},
+    compiler_options={
+        "xla_backend_optimization_level": 0,
+        "xla_llvm_disable_expensive_passes": True,
+    },
 )
 
 
@@ -325,7 +365,8 @@ def round_trip():
     clean = {"sinkage": np.asarray(st.sinkage), "drawbar_pull": np.asarray(st.drawbar_pull)}
     rng = np.random.default_rng(0)
     data = {
-        q: y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(y.shape) for q, y in clean.items()
+        q: y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(y.shape)
+        for q, y in clean.items()
     }
     res = sj.fit_wheel(WHEEL, _snow(**START), LOADS, SLIPS, fit=FITTED, **data)
     return data, res
@@ -450,7 +491,9 @@ def test_failed_equilibria_get_a_finite_penalty_without_gradient():
     ],
 )
 def test_fit_wheel_rejects_bad_input(kwargs, match):
-    args = dict(wheel=WHEEL, snow=TRUE_SNOW, load=LOADS, slip=SLIPS, sinkage=np.full(12, 0.1), fit=FITTED)
+    args = dict(
+        wheel=WHEEL, snow=TRUE_SNOW, load=LOADS, slip=SLIPS, sinkage=np.full(12, 0.1), fit=FITTED
+    )
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         sj.fit_wheel(**args)
@@ -468,7 +511,9 @@ def _data_file(name):
 
 
 def test_cli_fit_plate_on_the_shipped_table(capsys):
-    rc = _cli.main(["fit", "plate", "--data", _data_file("table_2_1.csv"), "--plate-size", "0.23", "--json"])
+    rc = _cli.main(
+        ["fit", "plate", "--data", _data_file("table_2_1.csv"), "--plate-size", "0.23", "--json"]
+    )
     out = json.loads(capsys.readouterr().out)
     assert rc == 0
     assert out["params"]["n"] == pytest.approx(THESIS_N, abs=2e-7)
@@ -494,7 +539,8 @@ def test_cli_fit_wheel(round_trip, tmp_path, capsys):
     data, res = round_trip
     path = tmp_path / "wheel.csv"
     rows = ["load_N,slip,sinkage_m,drawbar_pull_N"] + [
-        f"{float(ld)!r},{float(sl)!r},{float(z)!r},{float(dp)!r}" for ld, sl, z, dp in zip(LOADS, SLIPS, data["sinkage"], data["drawbar_pull"])
+        f"{float(ld)!r},{float(sl)!r},{float(z)!r},{float(dp)!r}"
+        for ld, sl, z, dp in zip(LOADS, SLIPS, data["sinkage"], data["drawbar_pull"])
     ]
     path.write_text("\n".join(rows) + "\n")
     rc = _cli.main(
@@ -537,9 +583,17 @@ def test_cli_malformed_plate_csv(case, tmp_path, capsys):
     "kind, content, message",
     [
         ("tire", "load_kN,cs,ca,mux,muy\n3.5,4.9,5.8,0.39,0.22\n", "missing column(s) 'e1'"),
-        ("wheel", "load_N,slip\n5000,0.2\n", "'sinkage_m or drawbar_pull_N or motion_resistance_N'"),
+        (
+            "wheel",
+            "load_N,slip\n5000,0.2\n",
+            "'sinkage_m or drawbar_pull_N or motion_resistance_N'",
+        ),
         ("wheel", "load_N,slip,sinkage_m\n5000,1.5,0.1\n", "column 'slip': 1.5 is out of range"),
-        ("wheel", "load_N,slip,sinkage_m\n5000,0.2,inf\n", "column 'sinkage_m': 'inf' is not a finite number"),
+        (
+            "wheel",
+            "load_N,slip,sinkage_m\n5000,0.2,inf\n",
+            "column 'sinkage_m': 'inf' is not a finite number",
+        ),
     ],
 )
 def test_cli_malformed_tire_and_wheel_csv(kind, content, message, tmp_path, capsys):

@@ -30,7 +30,9 @@ def test_default_p_w_reproduces_table_4_1_entry_angle():
     assert D / 2 * (1 - math.cos(theta0)) == pytest.approx(0.150, abs=1e-5)  # z0 = 15 cm
     z0_rel = 1 - D / 2 * (1 - math.cos(theta0)) / z_w
     J = integrate.quad(
-        lambda t: -math.log(z0_rel + D / z_w * math.sin(t / 2) ** 2) * math.cos(t), 0, theta0,
+        lambda t: -math.log(z0_rel + D / z_w * math.sin(t / 2) ** 2) * math.cos(t),
+        0,
+        theta0,
         epsrel=1e-13,
     )[0]
     p_w = 5000.0 / (D / 2 * b * J)
@@ -45,9 +47,13 @@ def test_bekker_presets_wong_table_2_3_in_si():
     assert float(us.cohesion) == pytest.approx(1030.0)
     assert float(us.tan_phi) == pytest.approx(math.tan(math.radians(19.7)))
     h = sj.BekkerSoil.snow_harrison()
-    assert (float(h.n), float(h.k_c), float(h.k_phi), float(h.cohesion)) == pytest.approx((1.6, 2490.0, 245900.0, 620.0))
+    assert (float(h.n), float(h.k_c), float(h.k_phi), float(h.cohesion)) == pytest.approx(
+        (1.6, 2490.0, 245900.0, 620.0)
+    )
     sw = sj.BekkerSoil.snow_sweden()
-    assert (float(sw.n), float(sw.k_c), float(sw.k_phi), float(sw.cohesion)) == pytest.approx((1.44, 10550.0, 66080.0, 6000.0))
+    assert (float(sw.n), float(sw.k_c), float(sw.k_phi), float(sw.cohesion)) == pytest.approx(
+        (1.44, 10550.0, 66080.0, 6000.0)
+    )
     assert float(sw.tan_phi) == pytest.approx(math.tan(math.radians(20.7)))
 
 

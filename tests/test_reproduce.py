@@ -82,8 +82,17 @@ def test_wheel_sweep_satisfies_equilibrium_by_independent_quadrature(small_run):
     for r in picks:
         theta0 = math.radians(float(r["entry_angle_deg"]))
         w, rr, t, m = reference.contact_integrals(
-            theta0, float(r["slip"]), D, b, snow["p_w"], snow["z_w"], snow["c"],
-            snow["tan_phi"], snow["K"], r["shear"])
+            theta0,
+            float(r["slip"]),
+            D,
+            b,
+            snow["p_w"],
+            snow["z_w"],
+            snow["c"],
+            snow["tan_phi"],
+            snow["K"],
+            r["shear"],
+        )
         assert w == pytest.approx(5000.0, rel=1e-6)
         assert float(r["motion_resistance_N"]) == pytest.approx(rr, rel=1e-6)
         assert float(r["thrust_N"]) == pytest.approx(t, rel=1e-6, abs=1e-6)
@@ -91,8 +100,9 @@ def test_wheel_sweep_satisfies_equilibrium_by_independent_quadrature(small_run):
     none = [float(r["sinkage_m"]) for r in rec if r["shear"] == "none" and r["load_N"] == "5000.0"]
     assert np.ptp(none) < 1e-12  # the no-shear sinkage does not depend on slip (Fig. 4.7)
     # Table 4.1's entry angle is the no-shear equilibrium at 5 kN (the preset's calibration).
-    assert float(next(r for r in rec if r["shear"] == "none" and r["load_N"] == "5000.0")
-                 ["entry_angle_deg"]) == pytest.approx(53.6747, abs=2e-3)
+    assert float(
+        next(r for r in rec if r["shear"] == "none" and r["load_N"] == "5000.0")["entry_angle_deg"]
+    ) == pytest.approx(53.6747, abs=2e-3)
 
 
 def test_load_function_tables_match_hand_formulas(small_run):
@@ -120,8 +130,11 @@ def _fx(load_kn, slip, c_s=None, mu=None, e1=None):
 def test_variation_ratios_match_hand_computation(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "fig_3_6.csv")
-    par = lambda f: (f / (0.2026 + 0.1516 * f), 0.5386 - 0.0438 * f + 6.9010e-4 * f * f,
-                     0.5 * (1 - math.exp(-(0.1203**2) * f * f)))
+    par = lambda f: (
+        f / (0.2026 + 0.1516 * f),
+        0.5386 - 0.0438 * f + 6.9010e-4 * f * f,
+        0.5 * (1 - math.exp(-(0.1203**2) * f * f)),
+    )
     (c1, m1, e1), (c2, m2, e2) = par(3.5), par(7.5)
     for r in rows[2::4]:
         s = float(r[0])
@@ -139,8 +152,9 @@ def test_normalised_shear_of_fig_4_6_matches_numpy(small_run):
     data = np.array(rows, dtype=float)
     assert data[-1, 0] < SIGMA_N0
     for k, slip in enumerate(slips):
-        np.testing.assert_allclose(data[:, 1 + k], tau_bar_classic_np(data[:, 0], slip),
-                                   rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(
+            data[:, 1 + k], tau_bar_classic_np(data[:, 0], slip), rtol=1e-10, atol=1e-14
+        )
 
 
 def test_derivative_table_verdicts(small_run):
@@ -149,7 +163,9 @@ def test_derivative_table_verdicts(small_run):
     rec = [dict(zip(header, r)) for r in rows]
     t45 = [r for r in rec if r["table"] == "Table 4.5"]
     assert len(t45) == 4 and all(float(r["max_rel_diff_vs_autodiff"]) < 1e-9 for r in t45)
-    printed = next(r for r in rec if "U1² + 2 U1" in r["expression"] and "printed" in r["expression"])
+    printed = next(
+        r for r in rec if "U1² + 2 U1" in r["expression"] and "printed" in r["expression"]
+    )
     corrected = next(r for r in rec if "corrected" in r["expression"])
     assert float(printed["max_rel_diff_vs_autodiff"]) > 1.0  # wrong sign: relative error > 100 %
     assert float(corrected["max_rel_diff_vs_autodiff"]) < 1e-10

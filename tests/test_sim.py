@@ -23,9 +23,7 @@ from .notebook_runner import outputs_text, run_notebook
 WHEEL = sj.RigidWheel.thesis_tire()
 SNOW = sj.WongSnow.thesis_fresh_snow()
 LOAD = 3500.0  # [N] per wheel: the thesis's lightest FEA load
-VEHICLE = sj.Vehicle(
-    mass=2 * LOAD / 9.80665, wheel_inertia=1.5, wheel=WHEEL, num_wheels=2
-)
+VEHICLE = sj.Vehicle(mass=2 * LOAD / 9.80665, wheel_inertia=1.5, wheel=WHEEL, num_wheels=2)
 T1, DT = 4.0, 0.05
 KNOT_TIMES = jnp.linspace(0.0, T1, 3)
 EPS = 0.05  # default speed_eps [m/s]
@@ -33,9 +31,7 @@ EPS = 0.05  # default speed_eps [m/s]
 
 def _parameters(snow, knots):
     """Vector x = (p_w, tan phi, 3 knot torques) of the shared program."""
-    return jnp.concatenate(
-        [jnp.array([snow.p_w, snow.tan_phi], float), jnp.asarray(knots, float)]
-    )
+    return jnp.concatenate([jnp.array([snow.p_w, snow.tan_phi], float), jnp.asarray(knots, float)])
 
 
 def _simulate(x, v0):
@@ -124,8 +120,16 @@ def from_rest():
 def test_start_from_rest_is_finite_and_physical(from_rest):
     traj, jac = from_rest
     assert traj.result == diffrax.RESULTS.successful
-    for name in ("speed", "distance", "wheel_speed", "slip", "sinkage", "drawbar_pull",
-                 "resisting_torque", "entry_angle"):
+    for name in (
+        "speed",
+        "distance",
+        "wheel_speed",
+        "slip",
+        "sinkage",
+        "drawbar_pull",
+        "resisting_torque",
+        "entry_angle",
+    ):
         assert np.all(np.isfinite(getattr(traj, name))), name
     assert np.all(np.isfinite(jac)) and np.all(jac != 0)
     assert np.all(np.asarray(traj.status) == Status.CONVERGED)
@@ -244,7 +248,9 @@ def test_coasting_vehicle_comes_to_rest_and_stays():
     inertia = float(VEHICLE.wheel_inertia)
     np.testing.assert_allclose(
         -inertia * np.diff(np.asarray(traj.wheel_speed), axis=0) / DT,
-        traj.resisting_torque[1:], rtol=1e-6, atol=1e-4,
+        traj.resisting_torque[1:],
+        rtol=1e-6,
+        atol=1e-4,
     )
     assert np.all(np.asarray(traj.slip[1:stop]) < 0)  # braking slip, eq. (2.6)
 
@@ -278,8 +284,9 @@ def test_bad_input_raises(kwargs, match):
     args.update(kwargs)
     t1, dt = args.pop("t1"), args.pop("dt")
     with pytest.raises(ValueError, match=match):
-        sj.simulate_longitudinal(args.pop("vehicle"), args.pop("snow"), args.pop("torque"),
-                                 t1, dt, **args)
+        sj.simulate_longitudinal(
+            args.pop("vehicle"), args.pop("snow"), args.pop("torque"), t1, dt, **args
+        )
     with pytest.raises(ValueError, match="load"):
         sj.wheel_forces(1.0, 2.0, -5.0, WHEEL, SNOW)
 

@@ -64,11 +64,18 @@ class _Background:
         self.notebook = self.notebook_error = None
         if "test_sharded_sweep_equals_single_device" in names:
             # The same sweep on 4 (virtual CPU) devices, in a fresh process.
-            env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4",
-                       JAX_PLATFORMS="cpu")
+            env = dict(
+                os.environ,
+                XLA_FLAGS="--xla_force_host_platform_device_count=4",
+                JAX_PLATFORMS="cpu",
+            )
             self.proc = subprocess.Popen(
-                [sys.executable, "-c", SHARDED_SCRIPT, str(self.sharded_out)], cwd=REPO,
-                env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                [sys.executable, "-c", SHARDED_SCRIPT, str(self.sharded_out)],
+                cwd=REPO,
+                env=env,
+                stdout=subprocess.PIPE,
+                stderr=subprocess.STDOUT,
+                text=True,
             )
         if "test_parameter_sweep_notebook" in names:
             self.thread = threading.Thread(target=self._run_notebook, daemon=True)
@@ -112,7 +119,8 @@ def _direct(wheel_leaves, snow_leaves, load, slip):
         st = sj.solve_wheel(
             sj.RigidWheel(**{k: pad(v) for k, v in wheel_leaves.items()}),
             sj.WongSnow(**{k: pad(v) for k, v in snow_leaves.items()}),
-            pad(load), pad(slip),
+            pad(load),
+            pad(slip),
         )
         parts.append({f: np.asarray(getattr(st, f))[: b - a] for f in (*OUTPUTS, "status")})
     return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
@@ -128,8 +136,9 @@ def _assert_rows_equal(got, want):
 def test_grid_sweep_equals_solve_wheel(reference):
     out, rows = reference
     # The grid (parameter set, load, slip), slip fastest, built here independently.
-    p, l, s = (g.reshape(-1) for g in np.meshgrid(np.arange(2), np.arange(2), np.arange(5),
-                                                  indexing="ij"))
+    p, l, s = (
+        g.reshape(-1) for g in np.meshgrid(np.arange(2), np.arange(2), np.arange(5), indexing="ij")
+    )
     np.testing.assert_array_equal(rows["index"], np.arange(N))
     np.testing.assert_array_equal(rows["param_set"], p)
     np.testing.assert_array_equal(rows["load"], LOADS[l])
@@ -139,9 +148,15 @@ def test_grid_sweep_equals_solve_wheel(reference):
     assert "z_w" not in rows and "diameter" not in rows  # constant leaves are not columns
     want = _direct(
         {"diameter": WHEEL.diameter, "width": WHEEL.width},
-        {"p_w": P_W[p], "z_w": SNOW.z_w, "cohesion": np.asarray(SNOW.cohesion)[p],
-         "tan_phi": SNOW.tan_phi, "shear_modulus": SNOW.shear_modulus},
-        LOADS[l], SLIPS[s],
+        {
+            "p_w": P_W[p],
+            "z_w": SNOW.z_w,
+            "cohesion": np.asarray(SNOW.cohesion)[p],
+            "tan_phi": SNOW.tan_phi,
+            "shear_modulus": SNOW.shear_modulus,
+        },
+        LOADS[l],
+        SLIPS[s],
     )
     for name in OUTPUTS:
         np.testing.assert_allclose(rows[name], want[name], rtol=1e-12, atol=0, err_msg=name)
@@ -167,15 +182,27 @@ def test_list_sweep_equals_solve_wheel(tmp_path):
     np.save(tmp_path / "loads.npy", loads)
     loads_mm = np.load(tmp_path / "loads.npy", mmap_mode="r")  # inputs are read by slices
     snow = sj.WongSnow(p_w, 0.2, 15e3, 0.0787, 0.01)
-    r = sj.sweep(WHEEL, snow, loads_mm, slips, grid=False, out=tmp_path / "s", chunk_size=C,
-                 progress=False, formats=("npz",))
+    r = sj.sweep(
+        WHEEL,
+        snow,
+        loads_mm,
+        slips,
+        grid=False,
+        out=tmp_path / "s",
+        chunk_size=C,
+        progress=False,
+        formats=("npz",),
+    )
     assert r.n_points == n and r.n_chunks == 2 and r.files == {"npz": tmp_path / "s/sweep.npz"}
     rows = sj.load_sweep(tmp_path / "s")
     assert list(rows) == ["index", "load", "slip", "p_w", *OUTPUTS, "status"]
     np.testing.assert_array_equal(rows["load"], loads)
-    want = _direct({"diameter": WHEEL.diameter, "width": WHEEL.width},
-                   {"p_w": p_w, "z_w": 0.2, "cohesion": 15e3, "tan_phi": 0.0787,
-                    "shear_modulus": 0.01}, loads, slips)
+    want = _direct(
+        {"diameter": WHEEL.diameter, "width": WHEEL.width},
+        {"p_w": p_w, "z_w": 0.2, "cohesion": 15e3, "tan_phi": 0.0787, "shear_modulus": 0.01},
+        loads,
+        slips,
+    )
     for name in OUTPUTS:
         np.testing.assert_allclose(rows[name], want[name], rtol=1e-12, atol=0, err_msg=name)
     np.testing.assert_array_equal(rows["status"], want["status"])
@@ -191,14 +218,30 @@ def test_interrupted_sweep_resumes_row_for_row(reference, tmp_path):
         raise KeyboardInterrupt
 
     with pytest.raises(KeyboardInterrupt):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
-                 callback=stop_after_first)
+        sj.sweep(
+            WHEEL,
+            SNOW,
+            LOADS,
+            SLIPS,
+            out=out,
+            chunk_size=C,
+            progress=False,
+            callback=stop_after_first,
+        )
     assert sorted(p.name for p in out.iterdir()) == ["chunk_000000.npz", "manifest.json"]
     with pytest.raises(ValueError, match="not finished"):
         sj.load_sweep(out)
     seen = []
-    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
-                 callback=lambda k, path: seen.append(k))
+    r = sj.sweep(
+        WHEEL,
+        SNOW,
+        LOADS,
+        SLIPS,
+        out=out,
+        chunk_size=C,
+        progress=False,
+        callback=lambda k, path: seen.append(k),
+    )
     assert seen == [1, 2] and r.computed_chunks == 2 and r.skipped_chunks == 1 and r.complete
     _assert_rows_equal(sj.load_sweep(out), ref_rows)
     for name in ("sweep.csv", "sweep.npz", "chunk_000000.npz", "chunk_000002.npz"):
@@ -253,18 +296,37 @@ def test_a_different_sweep_is_refused(reference, tmp_path):
         sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
     # resume=False starts over, deleting the sweep's files and nothing else.
     (out / "notes.txt").write_text("mine")
-    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
-                 resume=False, formats=("npz",))
+    r = sj.sweep(
+        WHEEL,
+        SNOW,
+        LOADS,
+        SLIPS,
+        out=out,
+        chunk_size=C,
+        progress=False,
+        resume=False,
+        formats=("npz",),
+    )
     assert r.computed_chunks == 3 and r.complete
     assert sorted(p.name for p in out.iterdir()) == [
-        "chunk_000000.npz", "chunk_000001.npz", "chunk_000002.npz", "manifest.json",
-        "notes.txt", "sweep.npz"]
+        "chunk_000000.npz",
+        "chunk_000001.npz",
+        "chunk_000002.npz",
+        "manifest.json",
+        "notes.txt",
+        "sweep.npz",
+    ]
     _assert_rows_equal(sj.load_sweep(out), reference[1])
     # The definition hash covers every input and option, and only those.
     base = _definition().digest()
     assert _definition().digest() == base
-    for kw in (dict(chunk_size=4), dict(shear="none"), dict(max_steps=32),
-               dict(nodes_per_panel=12), dict(grid=False)):
+    for kw in (
+        dict(chunk_size=4),
+        dict(shear="none"),
+        dict(max_steps=32),
+        dict(nodes_per_panel=12),
+        dict(grid=False),
+    ):
         try:
             other = _definition(**kw).digest()
         except ValueError:  # grid=False: these inputs cannot be zipped
@@ -282,12 +344,32 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
     # finds every chunk on disk writes the outputs.
     out = tmp_path / "s"
     written = {0: [], 1: []}
-    r0 = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
-                  process_index=0, process_count=2, callback=lambda k, p: written[0].append(k))
+    r0 = sj.sweep(
+        WHEEL,
+        SNOW,
+        LOADS,
+        SLIPS,
+        out=out,
+        chunk_size=C,
+        progress=False,
+        process_index=0,
+        process_count=2,
+        callback=lambda k, p: written[0].append(k),
+    )
     assert written[0] == [0, 2] and not r0.complete and r0.files == {}
     assert not (out / "chunk_000001.npz").exists() and not (out / "sweep.csv").exists()
-    r1 = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False,
-                  process_index=1, process_count=2, callback=lambda k, p: written[1].append(k))
+    r1 = sj.sweep(
+        WHEEL,
+        SNOW,
+        LOADS,
+        SLIPS,
+        out=out,
+        chunk_size=C,
+        progress=False,
+        process_index=1,
+        process_count=2,
+        callback=lambda k, p: written[1].append(k),
+    )
     assert written[1] == [1] and r1.complete and set(r1.files) == {"npz", "csv"}
     _assert_rows_equal(sj.load_sweep(out), reference[1])
 
@@ -295,11 +377,18 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
 def test_bad_inputs_raise_clear_errors(tmp_path):
     out = tmp_path / "s"
     cases = [
-        (dict(loads=np.array([3000.0, -1.0])), "loads must be finite and > 0 N; got -1.0 at index 1"),
+        (
+            dict(loads=np.array([3000.0, -1.0])),
+            "loads must be finite and > 0 N; got -1.0 at index 1",
+        ),
         (dict(slips=np.array([0.1, 1.5])), "slips must be finite and in \\[-1, 1\\]"),
         (dict(snow=sj.WongSnow(85e3, 0.2, 15e3, -0.1, 0.01)), "tan_phi must be finite and >= 0"),
-        (dict(snow=sj.WongSnow(np.array([60e3, 80e3]), np.array([0.1, 0.2, 0.3]), 1e4, 0.1, 0.01)),
-         "same length"),
+        (
+            dict(
+                snow=sj.WongSnow(np.array([60e3, 80e3]), np.array([0.1, 0.2, 0.3]), 1e4, 0.1, 0.01)
+            ),
+            "same length",
+        ),
         (dict(loads=np.ones((2, 2))), "loads must be a scalar or 1-D"),
         (dict(grid=False), "same length"),
         (dict(chunk_size=0), "chunk_size must be a positive integer"),
@@ -337,8 +426,20 @@ def test_sharded_sweep_equals_single_device(background, reference):
 
 def test_cli_sweep_resumes_and_reports_bad_specs(reference, tmp_path, capsys):
     out = tmp_path / "cli"
-    argv = ["sweep", "--loads", "3000,6000", "--slips", "0:0.8:5", "--p-w", "60e3,85.55e3",
-            "--chunk-size", "8", "--out", str(out), "--no-progress"]
+    argv = [
+        "sweep",
+        "--loads",
+        "3000,6000",
+        "--slips",
+        "0:0.8:5",
+        "--p-w",
+        "60e3,85.55e3",
+        "--chunk-size",
+        "8",
+        "--out",
+        str(out),
+        "--no-progress",
+    ]
     assert main(argv) == 0
     assert "20 points in 3 chunk(s) of 8 (3 computed, 0 already" in capsys.readouterr().out
     # The thesis preset with two p_w values (cohesion = 0.2165 p_w): the reference sweep.
@@ -347,13 +448,25 @@ def test_cli_sweep_resumes_and_reports_bad_specs(reference, tmp_path, capsys):
     assert main(argv) == 0  # the same command again: nothing left to compute
     assert "(0 computed, 3 already" in capsys.readouterr().out
     # --param-grid: the p_w and cohesion lists combine into 4 parameter sets.
-    grid_argv = argv[:-3] + ["--cohesion", "12990,18521", "--param-grid", "--format", "none",
-                             "--out", str(tmp_path / "grid"), "--no-progress"]
+    grid_argv = argv[:-3] + [
+        "--cohesion",
+        "12990,18521",
+        "--param-grid",
+        "--format",
+        "none",
+        "--out",
+        str(tmp_path / "grid"),
+        "--no-progress",
+    ]
     assert main(grid_argv) == 0
     rows = sj.load_sweep(tmp_path / "grid")
     assert rows["index"].size == 40 and not (tmp_path / "grid/sweep.csv").exists()
     assert list(zip(rows["p_w"][::10], rows["cohesion"][::10])) == [
-        (60e3, 12990.0), (60e3, 18521.0), (85.55e3, 12990.0), (85.55e3, 18521.0)]
+        (60e3, 12990.0),
+        (60e3, 18521.0),
+        (85.55e3, 12990.0),
+        (85.55e3, 18521.0),
+    ]
     capsys.readouterr()
     for bad, message in [
         (["--loads", "1:2"], "--loads '1:2': expected start:stop:num"),

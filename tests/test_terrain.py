@@ -23,12 +23,16 @@ def test_bekker_hand_value():
 
 def test_wong_law_and_inverse():
     # z = z_w (1 - e^{-sigma/p_w}); sigma = 3 p_w -> z = 0.95021 z_w (Wong's 95 % rule).
-    assert float(sj.wong_sinkage(30e3, 10e3, 0.2)) == pytest.approx(0.2 * (1 - math.exp(-3)), rel=1e-13)
+    assert float(sj.wong_sinkage(30e3, 10e3, 0.2)) == pytest.approx(
+        0.2 * (1 - math.exp(-3)), rel=1e-13
+    )
     assert 0.2 * (1 - math.exp(-3)) == pytest.approx(0.190043, rel=1e-5)
     # sigma = -p_w ln(1 - z / z_w): z = 0.1, z_w = 0.2 -> p_w ln 2.
     assert float(sj.wong_pressure(0.1, 10e3, 0.2)) == pytest.approx(10e3 * math.log(2), rel=1e-13)
     z = jnp.linspace(0.0, 0.199, 7)
-    np.testing.assert_allclose(sj.wong_sinkage(sj.wong_pressure(z, 7e3, 0.2), 7e3, 0.2), z, atol=1e-14)
+    np.testing.assert_allclose(
+        sj.wong_sinkage(sj.wong_pressure(z, 7e3, 0.2), 7e3, 0.2), z, atol=1e-14
+    )
     # At and beyond the base the pressure is +inf, never NaN.
     assert np.all(np.isposinf(sj.wong_pressure(jnp.array([0.2, 0.3]), 7e3, 0.2)))
     assert np.isfinite(jax.grad(sj.wong_pressure)(0.1, 7e3, 0.2))
@@ -71,5 +75,7 @@ def test_gawwad_crolla():
     assert expected == pytest.approx(306.9, abs=0.5)  # 5306.9 Pa - 2.5e5 Pa/m * 0.02 m
     got = sj.gawwad_crolla_unloading_pressure(z, z_u, b, k_c, k_phi, n, k0, a_u)
     assert float(got) == pytest.approx(expected, rel=1e-12)
-    assert float(sj.gawwad_crolla_unloading_pressure(z_u, z_u, b, k_c, k_phi, n, k0, a_u)) == pytest.approx(peak)
+    assert float(
+        sj.gawwad_crolla_unloading_pressure(z_u, z_u, b, k_c, k_phi, n, k0, a_u)
+    ) == pytest.approx(peak)
     assert float(sj.gawwad_crolla_unloading_pressure(0.0, z_u, b, k_c, k_phi, n, k0, a_u)) == 0.0

@@ -40,8 +40,12 @@ def _full(tree, n=N):
 
 def _solve(terrain, load, slip, distribution=DIST, wheel=WHEEL, shear="classic"):
     return sj.solve_wheel(
-        _full(wheel), _full(terrain), np.broadcast_to(load, (N,)), np.broadcast_to(slip, (N,)),
-        shear, distribution=None if distribution is None else _full(distribution),
+        _full(wheel),
+        _full(terrain),
+        np.broadcast_to(load, (N,)),
+        np.broadcast_to(slip, (N,)),
+        shear,
+        distribution=None if distribution is None else _full(distribution),
     )
 
 
@@ -68,15 +72,25 @@ def _true(name):
 
 def test_fit_names_and_transforms():
     assert _fit.fit_parameter_names(BEKKER, DIST) == (
-        "n", "k_c", "k_phi", "cohesion", "tan_phi", "shear_modulus", "c1", "c2", "c3")
+        "n",
+        "k_c",
+        "k_phi",
+        "cohesion",
+        "tan_phi",
+        "shear_modulus",
+        "c1",
+        "c2",
+        "c3",
+    )
     layered = sj.LayeredSnow.ice_layer_example()
     assert _fit.fit_parameter_names(layered)[:2] == ("top.p_w", "top.z_w")
     assert _fit.fit_parameter_names(layered)[-1] == "ice_failure_pressure"
     names, targets = _fit._resolve_fit_names(("distribution.c1", "terrain.k_c"), BEKKER, DIST)
     assert names == ("c1", "k_c") and targets == (("distribution", "c1"), ("terrain", "k_c"))
     soil, dist = _start()
-    base = dict(wheel=WHEEL, snow=soil, load=LOADS, slip=SLIPS, sinkage=np.ones(N),
-                distribution=dist)
+    base = dict(
+        wheel=WHEEL, snow=soil, load=LOADS, slip=SLIPS, sinkage=np.ones(N), distribution=dist
+    )
     with pytest.raises(ValueError, match=r"unknown parameter.*'p_w'.*allowed:.*'k_phi'.*'c1'"):
         sj.fit_wheel(**base, fit=("p_w",))
     with pytest.raises(ValueError, match="twice"):
@@ -220,8 +234,15 @@ def test_sweep_bekker_wong_reece_equals_solve_wheel(bekker_sweep):
         distribution=sj.WongReece(C1[p], _full(DIST).c2, _full(DIST).c3),
     )  # fmt: skip
     assert (rows["status"] == 0).all()
-    for name in ("entry_angle", "sinkage", "motion_resistance", "thrust", "drawbar_pull",
-                 "torque", "status"):
+    for name in (
+        "entry_angle",
+        "sinkage",
+        "motion_resistance",
+        "thrust",
+        "drawbar_pull",
+        "torque",
+        "status",
+    ):
         np.testing.assert_array_equal(rows[name], np.asarray(getattr(st, name)), err_msg=name)
     # A different terrain or distribution in the same directory is refused.
     with pytest.raises(ValueError, match="terrain: 'BekkerSoil' on disk, 'WongSnow' now"):
@@ -252,8 +273,10 @@ def test_cli_sweep_bekker_writes_the_same_csv(bekker_sweep, tmp_path, capsys):
         (["--preset", "thesis"], "not a preset of --terrain bekker"),
         (["--distribution", "none"], "--c1 only apply with --distribution wong-reece"),
         (["--terrain", "reece", "--preset", "none"], "not a preset of --terrain reece"),
-        (argv[:3] + argv[5:] + ["--terrain", "reece", "--n", "1.1"],
-         "--terrain reece has no preset: give --k-c-prime, --k-phi-prime, --unit-weight"),
+        (
+            argv[:3] + argv[5:] + ["--terrain", "reece", "--n", "1.1"],
+            "--terrain reece has no preset: give --k-c-prime, --k-phi-prime, --unit-weight",
+        ),
     ]:
         assert main(bad if bad[0] == "sweep" else argv + bad) == 2, bad
         err = capsys.readouterr().err
@@ -314,12 +337,30 @@ def test_cli_fit_wheel_on_bekker_wong_reece(synthetic, tmp_path, capsys):
 
     path = tmp_path / "wheel.csv"
     rows = zip(LOADS, SLIPS, synthetic["sinkage"], synthetic["drawbar_pull"])
-    path.write_text("load_N,slip,sinkage_m,drawbar_pull_N\n"
-                    + "".join(",".join(repr(float(x)) for x in r) + "\n" for r in rows))
+    path.write_text(
+        "load_N,slip,sinkage_m,drawbar_pull_N\n"
+        + "".join(",".join(repr(float(x)) for x in r) + "\n" for r in rows)
+    )
     soil, dist = _start()
-    argv = ["fit", "wheel", "--data", str(path), "--terrain", "bekker", "--k-phi",
-            repr(float(soil.k_phi)), "--n", repr(float(soil.n)), "--distribution",
-            "wong-reece", "--c1", repr(float(dist.c1)), "--fit", "k_phi,n,c1", "--json"]
+    argv = [
+        "fit",
+        "wheel",
+        "--data",
+        str(path),
+        "--terrain",
+        "bekker",
+        "--k-phi",
+        repr(float(soil.k_phi)),
+        "--n",
+        repr(float(soil.n)),
+        "--distribution",
+        "wong-reece",
+        "--c1",
+        repr(float(dist.c1)),
+        "--fit",
+        "k_phi,n,c1",
+        "--json",
+    ]
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
     for name in FITTED:

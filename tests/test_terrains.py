@@ -24,22 +24,40 @@ def random_cases(kind, m, seed):
     rng = np.random.default_rng(seed)
     out = []
     for _ in range(m):
-        d = dict(D=rng.uniform(0.5, 1.5), b=rng.uniform(0.1, 0.6), c=rng.uniform(0, 5e3),
-                 tp=rng.uniform(0.1, 0.8), K=rng.uniform(0.005, 0.05), slip=rng.uniform(-0.5, 0.9),
-                 th=rng.uniform(0.09, 1.2), c1=rng.uniform(0.3, 0.45), c2=rng.uniform(0.2, 0.4),
-                 c3=float(rng.choice([0.0, -0.1])))
+        d = dict(
+            D=rng.uniform(0.5, 1.5),
+            b=rng.uniform(0.1, 0.6),
+            c=rng.uniform(0, 5e3),
+            tp=rng.uniform(0.1, 0.8),
+            K=rng.uniform(0.005, 0.05),
+            slip=rng.uniform(-0.5, 0.9),
+            th=rng.uniform(0.09, 1.2),
+            c1=rng.uniform(0.3, 0.45),
+            c2=rng.uniform(0.2, 0.4),
+            c3=float(rng.choice([0.0, -0.1])),
+        )
         if kind == "bekker":
-            d.update(n=rng.uniform(0.5, 1.6), kc=rng.uniform(0, 20e3), kphi=rng.uniform(50e3, 2000e3))
+            d.update(
+                n=rng.uniform(0.5, 1.6), kc=rng.uniform(0, 20e3), kphi=rng.uniform(50e3, 2000e3)
+            )
         elif kind == "reece":
-            d.update(n=rng.uniform(0.5, 1.6), kcp=rng.uniform(0, 30), kpp=rng.uniform(100, 2000),
-                     g=rng.uniform(10e3, 20e3))
+            d.update(
+                n=rng.uniform(0.5, 1.6),
+                kcp=rng.uniform(0, 30),
+                kpp=rng.uniform(100, 2000),
+                g=rng.uniform(10e3, 20e3),
+            )
         elif kind == "wong":
             d.update(p_w=rng.uniform(5e3, 200e3), z_w=min(rng.uniform(0.05, 0.35), 0.45 * d["D"]))
             d["th"] = rng.uniform(0.05, 0.99) * math.acos(1 - 2 * d["z_w"] / d["D"])
         else:
             p1 = rng.uniform(10e3, 60e3)
-            d.update(p1=p1, zw1=rng.uniform(0.05, 0.15), p2=rng.uniform(10e3, 80e3),
-                     pf=p1 * rng.uniform(1.0, 4.0))
+            d.update(
+                p1=p1,
+                zw1=rng.uniform(0.05, 0.15),
+                p2=rng.uniform(10e3, 80e3),
+                pf=p1 * rng.uniform(1.0, 4.0),
+            )
             d["zw2"] = min(d["zw1"] + rng.uniform(0.05, 0.25), 0.45 * d["D"])
             d["zw1"] = min(d["zw1"], d["zw2"] - 0.02)
             d["th"] = rng.uniform(0.05, 0.99) * math.acos(1 - 2 * d["zw2"] / d["D"])
@@ -51,7 +69,9 @@ def terrain_of(kind, v):
     if kind == "bekker":
         return sj.BekkerSoil(v["n"], v["kc"], v["kphi"], v["c"], v["tp"], shear_modulus=v["K"])
     if kind == "reece":
-        return sj.ReeceSoil(v["n"], v["kcp"], v["kpp"], v["g"], v["c"], v["tp"], shear_modulus=v["K"])
+        return sj.ReeceSoil(
+            v["n"], v["kcp"], v["kpp"], v["g"], v["c"], v["tp"], shear_modulus=v["K"]
+        )
     if kind == "wong":
         return sj.WongSnow(v["p_w"], v["z_w"], v["c"], v["tp"], v["K"])
     top = sj.WongSnow(v["p1"], v["zw1"], v["c"], v["tp"], v["K"])
@@ -72,7 +92,9 @@ def law_of(kind, v):
 
 def batch(kind, cases, wong_reece):
     stack = lambda key: np.array([c[key] for c in cases])  # noqa: E731
-    terrain = jax.tree_util.tree_map(lambda *x: jnp.asarray(x), *[terrain_of(kind, c) for c in cases])
+    terrain = jax.tree_util.tree_map(
+        lambda *x: jnp.asarray(x), *[terrain_of(kind, c) for c in cases]
+    )
     dist = sj.WongReece(stack("c1"), stack("c2"), stack("c3")) if wong_reece else None
     return sj.RigidWheel(stack("D"), stack("b")), terrain, dist, stack
 
@@ -93,8 +115,18 @@ def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
     got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
     for k, c in enumerate(cases):
         law, z_f = law_of(kind, c)
-        exp = ref.contact(c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"],
-                          *fractions(c, wong_reece), z_f=z_f)
+        exp = ref.contact(
+            c["th"],
+            c["slip"],
+            c["D"],
+            c["b"],
+            law,
+            c["c"],
+            c["tp"],
+            c["K"],
+            *fractions(c, wong_reece),
+            z_f=z_f,
+        )
         scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
         assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
     assert np.allclose(f.drawbar_pull, f.thrust - f.motion_resistance)
@@ -102,7 +134,10 @@ def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
 
 EQUILIBRIUM_CASES = {
     "bekker": (sj.BekkerSoil.snow_us(), [(800.0, 0.3), (1000.0, -0.3)]),
-    "reece": (sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02), [(3000.0, 0.2), (3000.0, -0.2)]),
+    "reece": (
+        sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02),
+        [(3000.0, 0.2), (3000.0, -0.2)],
+    ),
     "wong": (sj.WongSnow.thesis_fresh_snow(), [(3000.0, 0.3), (3000.0, -0.3)]),
     "layered": (sj.LayeredSnow.ice_layer_example(), [(2000.0, 0.3), (2500.0, -0.2)]),
 }
@@ -112,13 +147,19 @@ def _ref_law(terrain):
     if isinstance(terrain, sj.BekkerSoil):
         return ref.bekker(float(terrain.n), float(terrain.k_c), float(terrain.k_phi)), None
     if isinstance(terrain, sj.ReeceSoil):
-        return ref.reece(float(terrain.n), float(terrain.k_c_prime), float(terrain.k_phi_prime),
-                         float(terrain.unit_weight), float(terrain.cohesion)), None
+        return ref.reece(
+            float(terrain.n),
+            float(terrain.k_c_prime),
+            float(terrain.k_phi_prime),
+            float(terrain.unit_weight),
+            float(terrain.cohesion),
+        ), None
     if isinstance(terrain, sj.WongSnow):
         return ref.wong(float(terrain.p_w), float(terrain.z_w)), None
     t, b = terrain.top, terrain.bottom
-    return ref.layered(float(t.p_w), float(t.z_w), float(b.p_w), float(b.z_w),
-                       float(terrain.ice_failure_pressure))
+    return ref.layered(
+        float(t.p_w), float(t.z_w), float(b.p_w), float(b.z_w), float(terrain.ice_failure_pressure)
+    )
 
 
 def _strength(terrain, layer="top"):
@@ -126,7 +167,10 @@ def _strength(terrain, layer="top"):
     return float(s.cohesion), float(s.tan_phi), float(s.shear_modulus)
 
 
-@pytest.mark.parametrize("kind,wong_reece", [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)])
+@pytest.mark.parametrize(
+    "kind,wong_reece",
+    [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)],
+)
 def test_equilibrium_matches_brentq(kind, wong_reece):
     terrain, points = EQUILIBRIUM_CASES[kind]
     wheel = sj.RigidWheel(0.736, 0.235)
@@ -141,9 +185,22 @@ def test_equilibrium_matches_brentq(kind, wong_reece):
     c, tp, K = _strength(terrain)
     for k, (load, slip) in enumerate(points):
         fm, fr = (0.43 + 0.32 * slip, 0.0) if wong_reece else (0.0, 0.0)
-        theta0, (w, r, t, m) = ref.solve(load, slip, 0.736, 0.235, law, c, tp, K, fm, fr, z_f=z_f,
-                                         depth=float(terrain.depth), shallowest=kind == "layered",
-                                         lower=_strength(terrain, "bottom") if kind == "layered" else None)
+        theta0, (w, r, t, m) = ref.solve(
+            load,
+            slip,
+            0.736,
+            0.235,
+            law,
+            c,
+            tp,
+            K,
+            fm,
+            fr,
+            z_f=z_f,
+            depth=float(terrain.depth),
+            shallowest=kind == "layered",
+            lower=_strength(terrain, "bottom") if kind == "layered" else None,
+        )
         assert float(st.entry_angle[k]) == pytest.approx(theta0, rel=1e-7)
         assert float(st.drawbar_pull[k]) == pytest.approx(t - r, rel=1e-6, abs=1e-7 * load)
         assert float(st.torque[k]) == pytest.approx(m, rel=1e-7)
@@ -163,14 +220,25 @@ def test_done_means_batched_loads_slips_parameter_sets():
     }
     for kind, terrain in base.items():
         # Two parameter sets: scale every leaf by (1, 1.1) along a leading axis.
-        sets = jax.tree_util.tree_map(lambda x: jnp.asarray(x) * jnp.array([1.0, 1.1])[:, None, None], terrain)
+        sets = jax.tree_util.tree_map(
+            lambda x: jnp.asarray(x) * jnp.array([1.0, 1.1])[:, None, None], terrain
+        )
         st = sj.solve_wheel(wheel, sets, loads, slips, distribution=dist)
         assert st.sinkage.shape == (2, 3, 4), kind
-        assert np.all(np.isin(np.asarray(st.status), [Status.CONVERGED, Status.BOTTOMED_OUT,
-                                                     Status.ENTRY_ANGLE_LIMIT])), (kind, st.status)
+        assert np.all(
+            np.isin(
+                np.asarray(st.status),
+                [Status.CONVERGED, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT],
+            )
+        ), (kind, st.status)
         assert np.all(np.isfinite(st.drawbar_pull)) and np.all(np.isfinite(st.torque))
-        one = sj.solve_wheel(wheel, jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets), 2000.0, 0.3,
-                             distribution=dist)
+        one = sj.solve_wheel(
+            wheel,
+            jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets),
+            2000.0,
+            0.3,
+            distribution=dist,
+        )
         # The single driving case uses the 12-node rule, the braking batch the 16-node one.
         assert float(one.sinkage) == pytest.approx(float(st.sinkage[1, 1, 2]), rel=1e-8)
 
@@ -186,7 +254,9 @@ def test_gradients_wrt_k_phi_n_c1_match_central_differences():
     slips = jnp.array([0.3, -0.2])
 
     def out(k_phi, n, c1):
-        s = sj.BekkerSoil(n, soil.k_c, k_phi, soil.cohesion, soil.tan_phi, shear_modulus=soil.shear_modulus)
+        s = sj.BekkerSoil(
+            n, soil.k_c, k_phi, soil.cohesion, soil.tan_phi, shear_modulus=soil.shear_modulus
+        )
         st = sj.solve_wheel(wheel, s, loads, slips, distribution=sj.WongReece(c1, 0.32))
         return jnp.stack([st.sinkage, st.drawbar_pull / 1e3, st.torque / 1e3])
 
@@ -194,12 +264,16 @@ def test_gradients_wrt_k_phi_n_c1_match_central_differences():
     jac = jax.jacfwd(out, argnums=(0, 1, 2))(*x0)
     steps = (800.0, 1e-5, 1e-5)
     for k in range(3):
+
         def f(v, k=k):
             args = list(x0)
             args[k] = v
             return np.asarray(out(*args))
+
         fd = _fd(f, x0[k], steps[k])
-        np.testing.assert_allclose(np.asarray(jac[k]), fd, rtol=1e-5, atol=1e-9 * np.max(np.abs(fd)))
+        np.testing.assert_allclose(
+            np.asarray(jac[k]), fd, rtol=1e-5, atol=1e-9 * np.max(np.abs(fd))
+        )
     # Reverse mode agrees with forward mode.
     g = jax.grad(lambda kp: jnp.sum(out(kp, 1.1, 0.43)))(800e3)
     assert float(g) == pytest.approx(float(jnp.sum(jac[0])), rel=1e-8)
@@ -214,10 +288,16 @@ def test_layered_pressure_rises_drops_at_ice_failure_then_rises_to_base():
     z = np.linspace(0, 0.299, 2000)
     p = np.asarray(snow.pressure(z, 0.2))
     before = z < z_f
-    assert np.all(np.diff(p[before]) > 0) and np.all(np.diff(p[~before]) > 0)  # rises on both branches
-    assert float(snow.pressure(z_f * (1 - 1e-12), 0.2)) == pytest.approx(p_f, rel=1e-9)  # fails at p_f
+    assert np.all(np.diff(p[before]) > 0) and np.all(
+        np.diff(p[~before]) > 0
+    )  # rises on both branches
+    assert float(snow.pressure(z_f * (1 - 1e-12), 0.2)) == pytest.approx(
+        p_f, rel=1e-9
+    )  # fails at p_f
     after = float(snow.pressure(z_f, 0.2))
-    assert after == pytest.approx(-float(bottom.p_w) * math.log1p(-z_f / float(bottom.z_w)), rel=1e-12)
+    assert after == pytest.approx(
+        -float(bottom.p_w) * math.log1p(-z_f / float(bottom.z_w)), rel=1e-12
+    )
     assert after < 0.5 * p_f  # the sudden drop
     assert float(snow.pressure(0.2999999, 0.2)) > 3 * p_f  # towards the base asymptote
     assert float(snow.pressure(0.3, 0.2)) == np.inf
@@ -238,8 +318,9 @@ def test_layered_wheel_breaks_through_the_ice_and_takes_the_shallowest_equilibri
     st = sj.solve_wheel(wheel, snow, load, 0.2)
     assert int(st.status) == Status.CONVERGED
     law, z_f = _ref_law(snow)
-    theta0, _ = ref.solve(load, 0.2, 0.736, 0.235, law, 1e3, 0.3, 0.01, z_f=z_f, depth=0.3,
-                          shallowest=True)
+    theta0, _ = ref.solve(
+        load, 0.2, 0.736, 0.235, law, 1e3, 0.3, 0.01, z_f=z_f, depth=0.3, shallowest=True
+    )
     assert float(st.entry_angle) == pytest.approx(theta0, rel=1e-7)
     assert float(st.entry_angle) < theta[k_peak]
     # Past the crust's peak the wheel breaks through: the sinkage jumps.
@@ -259,25 +340,58 @@ def test_refused_combinations_and_bad_types():
     with pytest.raises(ValueError, match="simplified"):
         sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, "simplified")
     with pytest.raises(ValueError, match="simplified"):
-        sj.solve_wheel(wheel, sj.WongSnow.thesis_fresh_snow(), 1000.0, 0.2, "simplified",
-                       distribution=sj.WongReece(0.43, 0.32))
+        sj.solve_wheel(
+            wheel,
+            sj.WongSnow.thesis_fresh_snow(),
+            1000.0,
+            0.2,
+            "simplified",
+            distribution=sj.WongReece(0.43, 0.32),
+        )
     with pytest.raises(TypeError, match="distribution"):
         sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, distribution=(0.43, 0.32))
     with pytest.raises(TypeError, match="terrain"):
         sj.solve_wheel(wheel, wheel, 1000.0, 0.2)
 
 
-@pytest.mark.parametrize("name,terrain,dist,slip", [
-    ("terrain.n", sj.BekkerSoil(-1.0, 0.0, 1e5, 0.0, 0.5), None, 0.2),
-    ("terrain.shear_modulus", sj.BekkerSoil(1.0, 0.0, 1e5, 0.0, 0.5, shear_modulus=0.0), None, 0.2),
-    ("terrain.unit_weight", sj.ReeceSoil(1.0, 1.0, 1e3, -1.0, 1e3, 0.5), None, 0.2),
-    ("terrain.k_c / b + k_phi", sj.BekkerSoil(1.0, -60e3, 100e3, 1e3, 0.3), None, 0.2),
-    ("terrain.c k'_c + gamma_s b k'_phi", sj.ReeceSoil(1.0, -10.0, 1.0, 1e3, 1e3, 0.5), None, 0.2),
-    ("snow.bottom.z_w", sj.LayeredSnow(sj.WongSnow(2e4, 0.2, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), 5e4), None, 0.2),
-    ("snow.ice_failure_pressure", sj.LayeredSnow(sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.3, 0, 0.3, 0.01), 0.0), None, 0.2),
-    ("distribution.c1 + c2 * slip", sj.BekkerSoil.snow_us(), sj.WongReece(0.9, 0.32), 0.5),
-    ("distribution.c3", sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32, 0.6), 0.1),
-])
+@pytest.mark.parametrize(
+    "name,terrain,dist,slip",
+    [
+        ("terrain.n", sj.BekkerSoil(-1.0, 0.0, 1e5, 0.0, 0.5), None, 0.2),
+        (
+            "terrain.shear_modulus",
+            sj.BekkerSoil(1.0, 0.0, 1e5, 0.0, 0.5, shear_modulus=0.0),
+            None,
+            0.2,
+        ),
+        ("terrain.unit_weight", sj.ReeceSoil(1.0, 1.0, 1e3, -1.0, 1e3, 0.5), None, 0.2),
+        ("terrain.k_c / b + k_phi", sj.BekkerSoil(1.0, -60e3, 100e3, 1e3, 0.3), None, 0.2),
+        (
+            "terrain.c k'_c + gamma_s b k'_phi",
+            sj.ReeceSoil(1.0, -10.0, 1.0, 1e3, 1e3, 0.5),
+            None,
+            0.2,
+        ),
+        (
+            "snow.bottom.z_w",
+            sj.LayeredSnow(
+                sj.WongSnow(2e4, 0.2, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), 5e4
+            ),
+            None,
+            0.2,
+        ),
+        (
+            "snow.ice_failure_pressure",
+            sj.LayeredSnow(
+                sj.WongSnow(2e4, 0.1, 0, 0.3, 0.01), sj.WongSnow(2e4, 0.3, 0, 0.3, 0.01), 0.0
+            ),
+            None,
+            0.2,
+        ),
+        ("distribution.c1 + c2 * slip", sj.BekkerSoil.snow_us(), sj.WongReece(0.9, 0.32), 0.5),
+        ("distribution.c3", sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32, 0.6), 0.1),
+    ],
+)
 def test_invalid_values_raise_eagerly_and_flag_under_jit(name, terrain, dist, slip):
     wheel = sj.RigidWheel(1.0, 0.4)
     with pytest.raises(ValueError, match=re.escape(name)):
@@ -292,8 +406,13 @@ def test_float32_general_path_has_no_nan():
     wheel, terrain, dist, stack = batch("bekker", cases, True)
     f32 = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32), t)  # noqa: E731
     loads = rng.uniform(500, 8000, len(cases))
-    st = sj.solve_wheel(f32(wheel), f32(terrain), np.float32(loads), np.float32(stack("slip")),
-                        distribution=f32(dist))
+    st = sj.solve_wheel(
+        f32(wheel),
+        f32(terrain),
+        np.float32(loads),
+        np.float32(stack("slip")),
+        distribution=f32(dist),
+    )
     assert st.sinkage.dtype == jnp.float32
     ok = np.asarray(st.status) != Status.INVALID_INPUT
     assert ok.all()

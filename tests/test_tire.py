@@ -626,6 +626,7 @@ def test_sensitivities_broadcast():
 # Property: F_pure >= F_combined for any admissible parameter set
 # ----------------------------------------------------------------------------------------
 
+
 @settings(max_examples=150, deadline=None)
 @given(
     load=st.floats(100.0, 2e4),

@@ -19,8 +19,9 @@ def test_shipped_data_as_printed():
     t = sj.shoop_2001_table11(include_uncertain=True)
     assert len(t["row"]) == 28 and int(t["certain"].sum()) == 26
     # rows quoted in the issue, in the order of Table 11
-    first = np.column_stack([t["snow_depth_m"], t["sinkage_m"], t["resistance_coefficient"],
-                             t["density_kg_m3"]])
+    first = np.column_stack(
+        [t["snow_depth_m"], t["sinkage_m"], t["resistance_coefficient"], t["density_kg_m3"]]
+    )
     np.testing.assert_array_equal(first[0], [0.13, 0.10, 0.05, 160])
     np.testing.assert_array_equal(first[11], [0.21, 0.17, 0.12, 220])
     np.testing.assert_array_equal(first[26], [0.14, 0.10, 0.02, 110])
@@ -28,8 +29,9 @@ def test_shipped_data_as_printed():
     assert len(sj.shoop_2001_table11()["row"]) == 26
     ex = sj.crrel_95_1_examples()
     np.testing.assert_array_equal(ex["rut_depth_m"], [0.09, 0.09, 0.0, 0.0, 0.072])
-    np.testing.assert_allclose(ex["gross_traction_n"] - ex["resistance_n"], ex["drawbar_n"],
-                               atol=0.11)
+    np.testing.assert_allclose(
+        ex["gross_traction_n"] - ex["resistance_n"], ex["drawbar_n"], atol=0.11
+    )
 
 
 def test_leave_one_out_never_uses_the_held_out_row():
@@ -58,8 +60,13 @@ def _read(path):
 
 
 def test_cli_writes_the_report(run):
-    for name in ("report.md", "metrics.csv", "predictions.csv", "crrel_95_1_examples.csv",
-                 "predicted_vs_measured.png"):
+    for name in (
+        "report.md",
+        "metrics.csv",
+        "predictions.csv",
+        "crrel_95_1_examples.csv",
+        "predicted_vs_measured.png",
+    ):
         assert (run / name).stat().st_size > 0, name
     report = (run / "report.md").read_text(encoding="utf-8")
     assert "| model | calibrated |" in report and "predicted_vs_measured.png" in report
@@ -70,11 +77,21 @@ def test_reported_metrics_match_the_predictions(run):
     preds = _read(run / "predictions.csv")
     metrics = _read(run / "metrics.csv")
     assert len(preds) == 26
-    meas = {"sinkage": np.array([float(r["sinkage_measured_m"]) for r in preds]),
-            "coefficient": np.array([float(r["coefficient_measured"]) for r in preds])}
+    meas = {
+        "sinkage": np.array([float(r["sinkage_measured_m"]) for r in preds]),
+        "coefficient": np.array([float(r["coefficient_measured"]) for r in preds]),
+    }
     keys = {m["model"] for m in metrics}
-    assert {"baseline", "crrel", "crrel_fit", "richmond_measured_rut", "wheel_wong",
-            "wheel_bekker", "bekker", "van_es"} <= keys
+    assert {
+        "baseline",
+        "crrel",
+        "crrel_fit",
+        "richmond_measured_rut",
+        "wheel_wong",
+        "wheel_bekker",
+        "bekker",
+        "van_es",
+    } <= keys
     for m in metrics:
         p = np.array([float(r[f"{m['quantity']}_{m['model']}"] or "nan") for r in preds])
         err = p - meas[m["quantity"]]
@@ -99,6 +116,8 @@ def test_worked_examples_reproduced(run):
     ex = _read(run / "crrel_95_1_examples.csv")
     for r in ex:
         assert float(r["rut_depth_snowjax_m"]) == pytest.approx(
-            float(r["rut_depth_report_m"]), abs=5e-4)  # printed to 0.1 cm
+            float(r["rut_depth_report_m"]), abs=5e-4
+        )  # printed to 0.1 cm
         assert round(float(r["drawbar_coefficient_snowjax"]), 3) == pytest.approx(
-            float(r["drawbar_coefficient_report"]), abs=1e-9)
+            float(r["drawbar_coefficient_report"]), abs=1e-9
+        )

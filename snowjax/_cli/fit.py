@@ -139,46 +139,75 @@ def register(sub) -> None:
     kinds = p.add_subparsers(dest="fit_kind", required=True)
 
     def common(q):
-        q.add_argument("--data", required=True, type=pathlib.Path, metavar="FILE.csv",
-                       help="CSV file with a header line (see the column list above)")
+        q.add_argument(
+            "--data",
+            required=True,
+            type=pathlib.Path,
+            metavar="FILE.csv",
+            help="CSV file with a header line (see the column list above)",
+        )
         q.add_argument("--json", action="store_true", help="print the result as JSON")
 
     plate = kinds.add_parser(
-        "plate", help="fit a pressure-sinkage law to plate-sinkage data",
+        "plate",
+        help="fit a pressure-sinkage law to plate-sinkage data",
         description=f"Fit Bekker (2.1), Wong (2.3) or Reece (2.4) to a plate test.  {_PLATE_HELP}.",
     )
     common(plate)
     plate.add_argument("--law", choices=("bekker", "wong", "reece"), default="bekker")
-    plate.add_argument("--plate-size", type=float, default=None, metavar="B",
-                       help="b [m] for every row when the file has no plate_size_m column")
-    plate.add_argument("--cohesion", type=float, default=None,
-                       help="c [Pa], to report Reece's k'_c (two or more plate sizes)")
-    plate.add_argument("--unit-weight", type=float, default=None,
-                       help="gamma_s [N/m^3], to report Reece's k'_phi (two or more sizes)")
+    plate.add_argument(
+        "--plate-size",
+        type=float,
+        default=None,
+        metavar="B",
+        help="b [m] for every row when the file has no plate_size_m column",
+    )
+    plate.add_argument(
+        "--cohesion",
+        type=float,
+        default=None,
+        help="c [Pa], to report Reece's k'_c (two or more plate sizes)",
+    )
+    plate.add_argument(
+        "--unit-weight",
+        type=float,
+        default=None,
+        help="gamma_s [N/m^3], to report Reece's k'_phi (two or more sizes)",
+    )
     plate.set_defaults(run=run)
 
     tire = kinds.add_parser(
-        "tire", help="fit the tire load functions (3.17)-(3.21)",
+        "tire",
+        help="fit the tire load functions (3.17)-(3.21)",
         description=f"Fit (3.17)-(3.21) to FEA or test data like thesis Table 3.2.  {_TIRE_HELP}.",
     )
     common(tire)
     tire.set_defaults(run=run)
 
     wheel = kinds.add_parser(
-        "wheel", help="fit snow parameters through the wheel equilibrium (4.14)",
+        "wheel",
+        help="fit snow parameters through the wheel equilibrium (4.14)",
         description=f"Fit WongSnow parameters to sinkage / drawbar pull / motion resistance "
         f"versus slip.  {_WHEEL_HELP}.  Unfitted snow parameters are held at the given "
         "values (defaults: the thesis's fresh snow).",
     )
     common(wheel)
-    wheel.add_argument("--fit", default=None,
-                       help="comma-separated parameters to fit: WongSnow fields (p_w, z_w, "
-                       "cohesion, tan_phi, shear_modulus; default p_w,z_w,tan_phi) or, with "
-                       "--terrain / --distribution, any of their leaves (e.g. k_phi,n,c1)")
-    wheel.add_argument("--terrain", choices=("wong", "bekker", "reece", "layered"),
-                       default="wong", help="terrain law (default %(default)s)")
-    wheel.add_argument("--preset", default=None,
-                       help="preset of the terrain (as `snowjax sweep --preset`)")
+    wheel.add_argument(
+        "--fit",
+        default=None,
+        help="comma-separated parameters to fit: WongSnow fields (p_w, z_w, "
+        "cohesion, tan_phi, shear_modulus; default p_w,z_w,tan_phi) or, with "
+        "--terrain / --distribution, any of their leaves (e.g. k_phi,n,c1)",
+    )
+    wheel.add_argument(
+        "--terrain",
+        choices=("wong", "bekker", "reece", "layered"),
+        default="wong",
+        help="terrain law (default %(default)s)",
+    )
+    wheel.add_argument(
+        "--preset", default=None, help="preset of the terrain (as `snowjax sweep --preset`)"
+    )
     wheel.add_argument("--diameter", type=float, default=0.736, help="wheel diameter D [m]")
     wheel.add_argument("--width", type=float, default=0.235, help="wheel width b [m]")
     wheel.add_argument("--p-w", type=float, default=None, help="p_w [Pa] (start or fixed value)")
@@ -186,17 +215,40 @@ def register(sub) -> None:
     wheel.add_argument("--cohesion", type=float, default=None, help="c [Pa]")
     wheel.add_argument("--tan-phi", type=float, default=None, help="tan(phi) [-]")
     wheel.add_argument("--shear-modulus", type=float, default=None, help="K [m]")
-    for option, unit in (("n", "-"), ("k-c", "N/m^(n+1)"), ("k-phi", "N/m^(n+2)"),
-                         ("k-c-prime", "-"), ("k-phi-prime", "-"), ("unit-weight", "N/m^3")):
-        wheel.add_argument(f"--{option}", type=float, default=None,
-                           help=f"{option.replace('-', '_')} [{unit}] (start or fixed value)")
-    wheel.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                       help="any terrain leaf by name, e.g. top.p_w=30e3 (repeatable)")
-    wheel.add_argument("--distribution", choices=("none", "wong-reece"), default="none",
-                       help="stress distribution (default %(default)s)")
+    for option, unit in (
+        ("n", "-"),
+        ("k-c", "N/m^(n+1)"),
+        ("k-phi", "N/m^(n+2)"),
+        ("k-c-prime", "-"),
+        ("k-phi-prime", "-"),
+        ("unit-weight", "N/m^3"),
+    ):
+        wheel.add_argument(
+            f"--{option}",
+            type=float,
+            default=None,
+            help=f"{option.replace('-', '_')} [{unit}] (start or fixed value)",
+        )
+    wheel.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="any terrain leaf by name, e.g. top.p_w=30e3 (repeatable)",
+    )
+    wheel.add_argument(
+        "--distribution",
+        choices=("none", "wong-reece"),
+        default="none",
+        help="stress distribution (default %(default)s)",
+    )
     for option in ("c1", "c2", "c3"):
-        wheel.add_argument(f"--{option}", type=float, default=None,
-                           help=f"Wong-Reece {option} [-] (start or fixed value)")
+        wheel.add_argument(
+            f"--{option}",
+            type=float,
+            default=None,
+            help=f"Wong-Reece {option} [-] (start or fixed value)",
+        )
     wheel.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
     wheel.add_argument("--max-steps", type=int, default=100, help="Levenberg-Marquardt steps")
     wheel.set_defaults(run=run)
@@ -214,13 +266,20 @@ def run(args) -> int:
     path = args.data
     try:
         if kind == "plate":
-            cols = read_csv(path, ["sinkage_m"], optional=["plate_size_m"],
-                            one_of=[("pressure_Pa", "pressure_kPa")])
+            cols = read_csv(
+                path,
+                ["sinkage_m"],
+                optional=["plate_size_m"],
+                one_of=[("pressure_Pa", "pressure_kPa")],
+            )
         elif kind == "tire":
             cols = read_csv(path, ["load_kN", "cs", "ca", "mux", "muy", "e1"])
         elif kind == "wheel":
-            cols = read_csv(path, ["load_N", "slip"],
-                            one_of=[("sinkage_m", "drawbar_pull_N", "motion_resistance_N")])
+            cols = read_csv(
+                path,
+                ["load_N", "slip"],
+                one_of=[("sinkage_m", "drawbar_pull_N", "motion_resistance_N")],
+            )
         else:  # pragma: no cover - argparse requires a kind
             return _fail("choose one of: plate, tire, wheel")
     except DataError as e:
@@ -313,9 +372,11 @@ def _wheel_model(args):
             raise ValueError(f"--set {item!r}: {name} is given twice")
         given[name] = value
         options[("terrain", name)] = f"--set {name}"
-    if args.terrain == "wong" and args.preset in (None, "thesis") and set(given) <= set(
-        wong_only
-    ) | set(shared):
+    if (
+        args.terrain == "wong"
+        and args.preset in (None, "thesis")
+        and set(given) <= set(wong_only) | set(shared)
+    ):
         # The thesis's fresh snow with the given values replacing its own.
         base = WongSnow.thesis_fresh_snow()
         snow = WongSnow(**{k: float(given.get(k, getattr(base, k))) for k in (

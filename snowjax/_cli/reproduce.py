@@ -21,10 +21,17 @@ def register(sub) -> None:
         description="Regenerate the figures of Sankapalli (2004) as PNG files, the numbers "
         "behind them as CSV files, and report.md comparing each figure with the thesis.",
     )
-    rep.add_argument("--out", type=pathlib.Path, default=pathlib.Path("snowjax-output"),
-                     help="output directory (default: ./snowjax-output)")
-    rep.add_argument("--small", action="store_true",
-                     help="reduced grid sizes (for tests; same files, coarser curves)")
+    rep.add_argument(
+        "--out",
+        type=pathlib.Path,
+        default=pathlib.Path("snowjax-output"),
+        help="output directory (default: ./snowjax-output)",
+    )
+    rep.add_argument(
+        "--small",
+        action="store_true",
+        help="reduced grid sizes (for tests; same files, coarser curves)",
+    )
     rep.set_defaults(run=run, parser=rep)
 
 
@@ -55,13 +62,18 @@ def run(args) -> int:
         ok = f"{spec.stem}.png" in written and f"{spec.stem}.csv" in written
         if not ok:
             missing.append(spec.number)
-        table.add_row(spec.number, spec.title,
-                      f"{spec.stem}.png, .csv" if ok else "[red]FAILED (see report.md)[/red]")
+        table.add_row(
+            spec.number,
+            spec.title,
+            f"{spec.stem}.png, .csv" if ok else "[red]FAILED (see report.md)[/red]",
+        )
     console.print(table)
     extra = [n for n in ("wheel_sweep.csv", "derivative_tables.csv") if n in written]
     console.print(f"Also written: {', '.join(extra)}.")
     report = pathlib.Path(args.out) / "report.md"
-    console.print(f"{len(files)} files in {elapsed:.1f} s. Report: [bold]{report}[/bold]", soft_wrap=True)
+    console.print(
+        f"{len(files)} files in {elapsed:.1f} s. Report: [bold]{report}[/bold]", soft_wrap=True
+    )
     if missing:
         console.print(f"[red]Figures not produced: {', '.join(missing)}[/red]")
         return 1

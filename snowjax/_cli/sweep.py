@@ -79,11 +79,14 @@ def register(sub) -> None:
     p.add_argument("--slips", default="0:0.9:10", help="driving slips [-] (default %(default)s)")
     p.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
     p.add_argument(
-        "--terrain", choices=_TERRAINS, default="wong",
+        "--terrain",
+        choices=_TERRAINS,
+        default="wong",
         help="terrain law: WongSnow, BekkerSoil, ReeceSoil or LayeredSnow (default %(default)s)",
     )
     p.add_argument(
-        "--preset", default=None,
+        "--preset",
+        default=None,
         help="preset parameter set of the terrain: wong: thesis (default), plate-rule;"
         " bekker: snow-us (default), snow-harrison, snow-sweden, thesis-lab-snow;"
         " layered: ice-layer-example (default); reece: none",
@@ -104,11 +107,16 @@ def register(sub) -> None:
             help=f"override {obj} {field} [{unit}]; a list gives several parameter sets",
         )
     p.add_argument(
-        "--set", action="append", default=[], metavar="NAME=VALUES",
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUES",
         help="set any terrain leaf by its column name, e.g. top.p_w=30e3 (repeatable)",
     )
     p.add_argument(
-        "--distribution", choices=("none", "wong-reece"), default="none",
+        "--distribution",
+        choices=("none", "wong-reece"),
+        default="none",
         help="stress distribution: the thesis's front region or Wong-Reece (1967) with"
         " --c1, --c2, --c3 (default %(default)s)",
     )
@@ -123,9 +131,13 @@ def register(sub) -> None:
         help="zip loads, slips and parameter lists (one point each) instead of the grid",
     )
     p.add_argument("--out", default="snowjax-sweep", help="output directory (default %(default)s)")
-    p.add_argument("--chunk-size", type=int, default=8192, help="rows per chunk (default %(default)s)")
     p.add_argument(
-        "--format", default="npz,csv", help="consolidated outputs: npz, csv, both or none"
+        "--chunk-size", type=int, default=8192, help="rows per chunk (default %(default)s)"
+    )
+    p.add_argument(
+        "--format",
+        default="npz,csv",
+        help="consolidated outputs: npz, csv, both or none"
         " (the chunk files are always kept) (default %(default)s)",
     )
     p.add_argument("--nodes-per-panel", type=int, default=None, help="quadrature nodes per panel")
@@ -321,7 +333,8 @@ def _only(given, cls, options, kind, leaves=None):
         raise ValueError(
             ", ".join(options[("terrain", f)] for f in wrong)
             + f" is not a parameter of --terrain {kind} ({cls.__name__}: "
-            + ", ".join(names) + ")"
+            + ", ".join(names)
+            + ")"
         )
 
 

@@ -23,14 +23,29 @@ def register(sub) -> None:
         "sinkage and resistance in snow (Shoop 2001, ERDC/CRREL TR-01-16, Table 11) and "
         "the CRM-1 examples of CRREL 95-1; writes report.md, CSVs and a figure.",
     )
-    p.add_argument("--out", type=pathlib.Path, default=pathlib.Path("snowjax-validate"),
-                   help="output directory (default: ./snowjax-validate)")
-    p.add_argument("--include-uncertain", action="store_true",
-                   help="also use the two Table 11 rows of uncertain tyre radius")
-    p.add_argument("--wheel-load", type=float, default=None,
-                   help="wheel load [N] (default 6800, from CRREL 95-7 Table 2)")
-    p.add_argument("--tyre-width", type=float, default=None,
-                   help="tyre width [m] (default 0.235, an assumption)")
+    p.add_argument(
+        "--out",
+        type=pathlib.Path,
+        default=pathlib.Path("snowjax-validate"),
+        help="output directory (default: ./snowjax-validate)",
+    )
+    p.add_argument(
+        "--include-uncertain",
+        action="store_true",
+        help="also use the two Table 11 rows of uncertain tyre radius",
+    )
+    p.add_argument(
+        "--wheel-load",
+        type=float,
+        default=None,
+        help="wheel load [N] (default 6800, from CRREL 95-7 Table 2)",
+    )
+    p.add_argument(
+        "--tyre-width",
+        type=float,
+        default=None,
+        help="tyre width [m] (default 0.235, an assumption)",
+    )
     p.set_defaults(run=run, parser=p)
 
 
@@ -58,12 +73,19 @@ def run(args) -> int:
         args.parser.error("--tyre-width must be in (0, 2) metres")
     console = Console()
     start = time.perf_counter()
-    result = validate(args.out, include_uncertain=args.include_uncertain, wheel_load=load,
-                      tyre_width=width, progress=True)
+    result = validate(
+        args.out,
+        include_uncertain=args.include_uncertain,
+        wheel_load=load,
+        tyre_width=width,
+        progress=True,
+    )
     console.print(metrics_table_markdown(result.metrics, result.models), markup=False)
     for key, why in result.skipped.items():
         console.print(f"[yellow]skipped {key}: {why}[/yellow]")
     report = pathlib.Path(args.out) / "report.md"
-    console.print(f"{len(result.files)} files in {time.perf_counter() - start:.1f} s. "
-                  f"Report: [bold]{report}[/bold]")
+    console.print(
+        f"{len(result.files)} files in {time.perf_counter() - start:.1f} s. "
+        f"Report: [bold]{report}[/bold]"
+    )
     return 0

@@ -119,13 +119,19 @@ def crrel_sinkage(
     **Returns:** z [m], 0 <= z < h.
     """
     _nonnegative("snow_depth", snow_depth, "m")
-    _check("initial_density", initial_density,
-           lambda r: (r > 0) & (r <= ICE_DENSITY),
-           f"in (0, {ICE_DENSITY:g}] kg/m^3 (kg/m^3, not Mg/m^3)")
-    _check("final_density", final_density, lambda r: (r > 0) & (r <= ICE_DENSITY),
-           f"in (0, {ICE_DENSITY:g}] kg/m^3 (kg/m^3, not Mg/m^3)")
-    h, r0, rf = (jnp.asarray(x, dtype=float) for x in (snow_depth, initial_density,
-                                                        final_density))
+    _check(
+        "initial_density",
+        initial_density,
+        lambda r: (r > 0) & (r <= ICE_DENSITY),
+        f"in (0, {ICE_DENSITY:g}] kg/m^3 (kg/m^3, not Mg/m^3)",
+    )
+    _check(
+        "final_density",
+        final_density,
+        lambda r: (r > 0) & (r <= ICE_DENSITY),
+        f"in (0, {ICE_DENSITY:g}] kg/m^3 (kg/m^3, not Mg/m^3)",
+    )
+    h, r0, rf = (jnp.asarray(x, dtype=float) for x in (snow_depth, initial_density, final_density))
     valid = (h >= 0) & (r0 > 0) & (rf > 0) & (r0 <= ICE_DENSITY) & (rf <= ICE_DENSITY)
     z = h * jnp.maximum(1.0 - r0 / _safe(valid, rf), 0.0)
     return _nan_unless(valid, z)
@@ -215,8 +221,7 @@ def crrel_wheel(
     """
     _positive("load", load, "N")
     if final_density is None:
-        final_density = (500.0 if peak_pressure is None
-                         else crrel_final_density(peak_pressure))
+        final_density = 500.0 if peak_pressure is None else crrel_final_density(peak_pressure)
     rho_f = jnp.asarray(final_density, dtype=float)
     z = crrel_sinkage(snow_depth, initial_density, rho_f)
     _positive("radius", radius, "m")
@@ -263,10 +268,13 @@ def crrel_drawbar(
     **Returns:** `(drawbar_pull [N], drawbar_coefficient [-])`.
     """
     _positive("weight", weight, "N")
-    _check("slope", slope, lambda s: (s > -jnp.pi / 2) & (s < jnp.pi / 2),
-           "in (-pi/2, pi/2) rad (radians, not degrees)")
-    t, r, w, s = (jnp.asarray(x, dtype=float) for x in (gross_traction, resistance, weight,
-                                                         slope))
+    _check(
+        "slope",
+        slope,
+        lambda s: (s > -jnp.pi / 2) & (s < jnp.pi / 2),
+        "in (-pi/2, pi/2) rad (radians, not degrees)",
+    )
+    t, r, w, s = (jnp.asarray(x, dtype=float) for x in (gross_traction, resistance, weight, slope))
     valid = (w > 0) & (jnp.abs(s) < jnp.pi / 2)
     pull = t - r - w * jnp.sin(s)
     return _nan_unless(valid, pull), _nan_unless(valid, pull / _safe(valid, w))

@@ -248,9 +248,7 @@ def brixius_wheel_numeric(
     **Returns:** N_B [-].
     """
     _check_tire(cone_index, width, diameter, load, deflection, section_height)
-    numeric, valid = _wheel_numeric(
-        cone_index, width, diameter, load, deflection, section_height
-    )
+    numeric, valid = _wheel_numeric(cone_index, width, diameter, load, deflection, section_height)
     return _nan_unless(valid, numeric)
 
 
@@ -327,9 +325,7 @@ def brixius(
     _check_tire(cone_index, width, diameter, load, deflection, section_height)
     _check("slip", slip, lambda s: (s >= 0) & (s <= 1), "in [0, 1] (a fraction, not %)")
     a, c = _BRIXIUS_SLIP_COEFFICIENTS[variant]
-    numeric, valid = _wheel_numeric(
-        cone_index, width, diameter, load, deflection, section_height
-    )
+    numeric, valid = _wheel_numeric(cone_index, width, diameter, load, deflection, section_height)
     s = jnp.asarray(slip)
     valid = valid & (numeric > 0) & (s >= 0) & (s <= 1)
     n_b = _safe(valid, numeric)
@@ -624,28 +620,39 @@ def bekker_rolling_resistance(
 # ----------------------------------------------------------------------------------------
 
 
-def _check_van_es(width, snow_depth, initial_density, final_density, ice_pressure,
-                  grain_index, ice_density):
+def _check_van_es(
+    width, snow_depth, initial_density, final_density, ice_pressure, grain_index, ice_density
+):
     _positive("width", width, "m")
     _nonnegative("snow_depth", snow_depth, "m")
     _positive("ice_pressure", ice_pressure, "Pa")
-    _check("grain_index", grain_index, lambda x: (x > 0) & np.isfinite(x),
-           "finite and > 0 (Van Es: 1 to 2, 1 for natural snow)")
+    _check(
+        "grain_index",
+        grain_index,
+        lambda x: (x > 0) & np.isfinite(x),
+        "finite and > 0 (Van Es: 1 to 2, 1 for natural snow)",
+    )
     _positive("ice_density", ice_density, "kg/m^3")
     _positive("initial_density", initial_density, "kg/m^3")
     _check_pair(
         "`initial_density` must not exceed `ice_density` (snow is less dense than ice).",
-        initial_density, ice_density, lambda r0, ri: r0 <= ri,
+        initial_density,
+        ice_density,
+        lambda r0, ri: r0 <= ri,
     )
     _check_pair(
         "`final_density` must lie in [initial_density, ice_density]: compaction cannot "
         "loosen the snow, nor compress it beyond ice.",
-        final_density, initial_density, lambda rf, r0: rf >= r0,
+        final_density,
+        initial_density,
+        lambda rf, r0: rf >= r0,
     )
     _check_pair(
         "`final_density` must lie in [initial_density, ice_density]: compaction cannot "
         "loosen the snow, nor compress it beyond ice.",
-        final_density, ice_density, lambda rf, ri: rf <= ri,
+        final_density,
+        ice_density,
+        lambda rf, ri: rf <= ri,
     )
 
 
@@ -697,16 +704,30 @@ def van_es_compaction_resistance(
 
     **Returns:** compaction resistance D_c [N].
     """
-    _check_van_es(width, snow_depth, initial_density, final_density, ice_pressure,
-                  grain_index, ice_density)
+    _check_van_es(
+        width, snow_depth, initial_density, final_density, ice_pressure, grain_index, ice_density
+    )
     b, h0, rho0, rhof, sig, lam, rhoi = (
         jnp.asarray(x)
-        for x in (width, snow_depth, initial_density, final_density, ice_pressure,
-                  grain_index, ice_density)
+        for x in (
+            width,
+            snow_depth,
+            initial_density,
+            final_density,
+            ice_pressure,
+            grain_index,
+            ice_density,
+        )
     )
     valid = (
-        (b > 0) & (h0 >= 0) & (sig > 0) & (lam > 0) & (rhoi > 0)
-        & (rho0 > 0) & (rho0 <= rhof) & (rhof <= rhoi)
+        (b > 0)
+        & (h0 >= 0)
+        & (sig > 0)
+        & (lam > 0)
+        & (rhoi > 0)
+        & (rho0 > 0)
+        & (rho0 <= rhof)
+        & (rhof <= rhoi)
     )
     rho0_s = _safe(valid, rho0)
     rhof_s = _safe(valid, rhof)
@@ -766,8 +787,13 @@ def van_es_rolling_resistance(
     _nonnegative("hard_surface_coefficient", hard_surface_coefficient, "")
     _nonnegative("displacement_drag", displacement_drag, "N")
     d_c = van_es_compaction_resistance(
-        width, snow_depth, initial_density, final_density, ice_pressure,
-        grain_index=grain_index, ice_density=ice_density,
+        width,
+        snow_depth,
+        initial_density,
+        final_density,
+        ice_pressure,
+        grain_index=grain_index,
+        ice_density=ice_density,
     )
     w, f_r, d_d = (jnp.asarray(x) for x in (load, hard_surface_coefficient, displacement_drag))
     valid = (w >= 0) & (f_r >= 0) & (d_d >= 0)
@@ -906,7 +932,13 @@ def compare_motion_resistance(
     rho_f = np.where(rut < h0, density * h0 / np.maximum(h0 - rut, 1e-300), ICE_DENSITY)
     rho_f = np.clip(rho_f, density, ICE_DENSITY)
     van_es = van_es_rolling_resistance(
-        loads, width, h0, density, rho_f, ice_pressure, hard_surface_coefficient,
+        loads,
+        width,
+        h0,
+        density,
+        rho_f,
+        ice_pressure,
+        hard_surface_coefficient,
         grain_index=grain_index,
     )
     table["final_density"] = np.where(known, rho_f, np.nan)
@@ -924,8 +956,11 @@ def compare_motion_resistance(
         table["rigid_wheel_in_range"] = table["rigid_wheel_status"] == 0
     table["richmond_in_range"] = np.isfinite(table["richmond"])
     table["van_es_in_range"] = np.isfinite(table["van_es"]) & (table["final_density"] < ICE_DENSITY)
-    figure = _comparison_figure(table, wheel_label=f"D {diameter:.3f} m, b {width:.3f} m",
-                                snow_label=f"rho0 {density:.0f} kg/m^3, h0 {h0:.2f} m")
+    figure = _comparison_figure(
+        table,
+        wheel_label=f"D {diameter:.3f} m, b {width:.3f} m",
+        snow_label=f"rho0 {density:.0f} kg/m^3, h0 {h0:.2f} m",
+    )
     return table, figure
 
 
@@ -973,8 +1008,7 @@ def _comparison_figure(table, *, wheel_label: str, snow_label: str):
         ax.grid(True, alpha=0.3)
     ax_force.legend(fontsize=8)
     figure.suptitle(
-        f"Tyre {wheel_label}; snow {snow_label}   (open markers: outside the model's "
-        "stated range)",
+        f"Tyre {wheel_label}; snow {snow_label}   (open markers: outside the model's stated range)",
         fontsize=10,
     )
     return figure

@@ -46,7 +46,8 @@ from __future__ import annotations
 import dataclasses
 import importlib.resources
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -229,9 +230,7 @@ class FitResult:
         lines.append(f"  {'parameter':<{width}}  {'value':>14}  {'std. error':>11}  unit")
         for k, v in self.params.items():
             se = self.stderr.get(k, float("nan"))
-            lines.append(
-                f"  {k:<{width}}  {v:>14.7g}  {se:>11.3g}  {self.units.get(k, '')}"
-            )
+            lines.append(f"  {k:<{width}}  {v:>14.7g}  {se:>11.3g}  {self.units.get(k, '')}")
         sse_unit = self.info.get("sse_unit", "")
         status = "converged" if self.success else "did NOT converge"
         lines.append(
@@ -731,8 +730,10 @@ def fit_plate_sinkage(
         else:
             # Combined modulus k_j = A g(b_j) + B: Bekker g = 1/b, Reece k = A + B b.
             g = 1.0 / sizes if law == "bekker" else sizes
-            a_mat = np.stack([g, np.ones_like(g)], 1) if law == "bekker" else np.stack(
-                [np.ones_like(g), g], 1
+            a_mat = (
+                np.stack([g, np.ones_like(g)], 1)
+                if law == "bekker"
+                else np.stack([np.ones_like(g), g], 1)
             )
             ab, *_ = np.linalg.lstsq(a_mat, moduli, rcond=None)
             kscale = float(np.mean(moduli))
@@ -1533,9 +1534,7 @@ def fit_wheel(
     if isinstance(snow, WongSnow):
         snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
     else:
-        snow_a = _with_leaves(
-            snow, {p: jnp.asarray(v, dtype) for p, v in start["terrain"].items()}
-        )
+        snow_a = _with_leaves(snow, {p: jnp.asarray(v, dtype) for p, v in start["terrain"].items()})
     dist_a = None
     if distribution is not None:
         dist_a = _with_leaves(

@@ -23,7 +23,7 @@ import math
 import pathlib
 import time
 import warnings
-from typing import Callable, Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 
@@ -209,10 +209,20 @@ def _fig_2_1(ctx: _Context) -> FigureResult:
 
     fig, ax = _subplots(figsize=(6.4, 4.4))
     ax.plot(z * 100, p / 1e3, "o", color="k", label="Table 2.1 (plate test, Shoop)")
-    ax.plot(zz * 100, p_fit_curve / 1e3, "-", color="C0",
-            label=f"snowjax fit: n = {n_fit:.4f}, k_eq = {k_eq / 1e3:.2f} kN/m^(n+2)")
-    ax.plot(zz * 100, p_th_curve / 1e3, "--", color="C3",
-            label=f"thesis fit: n = {th['n']:.4f}, k_c/b + k_phi = {k_eq_thesis / 1e3:.2f}")
+    ax.plot(
+        zz * 100,
+        p_fit_curve / 1e3,
+        "-",
+        color="C0",
+        label=f"snowjax fit: n = {n_fit:.4f}, k_eq = {k_eq / 1e3:.2f} kN/m^(n+2)",
+    )
+    ax.plot(
+        zz * 100,
+        p_th_curve / 1e3,
+        "--",
+        color="C3",
+        label=f"thesis fit: n = {th['n']:.4f}, k_c/b + k_phi = {k_eq_thesis / 1e3:.2f}",
+    )
     ax.set_xlabel("sinkage z [cm]")
     ax.set_ylabel("pressure p [kPa]")
     _title(ax, "2.1", "Bekker fit (2.1) vs plate test")
@@ -220,8 +230,10 @@ def _fig_2_1(ctx: _Context) -> FigureResult:
     ax.legend(fontsize=8)
     fig.tight_layout()
 
-    rows = [[zi, pi / 1e3, pf / 1e3, pt / 1e3, (pf - pi) / 1e3] for zi, pi, pf, pt in
-            zip(z, p, p_fit, p_th)]
+    rows = [
+        [zi, pi / 1e3, pf / 1e3, pt / 1e3, (pf - pi) / 1e3]
+        for zi, pi, pf, pt in zip(z, p, p_fit, p_th)
+    ]
     rms_fit = float(np.sqrt(np.mean((p_fit - p) ** 2)))
     rms_th = float(np.sqrt(np.mean((p_th - p) ** 2)))
     stderr = getattr(fit, "stderr", {}) or {}
@@ -229,8 +241,8 @@ def _fig_2_1(ctx: _Context) -> FigureResult:
     se_txt = f" (standard error {float(se_n):.3f})" if se_n is not None else ""
     comparison = (
         f"The thesis fits Bekker's law to the 20 digitised points of Table 2.1 and reports "
-        f"k_c = 3.43 kN/m^(n+1), k_phi = 218.84 kN/m^(n+2), n = 1.0707 and that \"the fitted "
-        f"curve and the experimental data matched well\". A single plate size identifies "
+        f'k_c = 3.43 kN/m^(n+1), k_phi = 218.84 kN/m^(n+2), n = 1.0707 and that "the fitted '
+        f'curve and the experimental data matched well". A single plate size identifies '
         f"only k_eq = k_c/b + k_phi; with b = {b * 100:.1f} cm the thesis's values give "
         f"k_eq = {k_eq_thesis / 1e3:.2f} kN/m^(n+2). Our least-squares fit gives "
         f"n = {n_fit:.4f}{se_txt} and k_eq = {k_eq / 1e3:.2f} kN/m^(n+2) "
@@ -242,10 +254,19 @@ def _fig_2_1(ctx: _Context) -> FigureResult:
         f"13.11 kPa, the only row whose pressure and load disagree."
     )
     return FigureResult(
-        fig, ["sinkage_m", "pressure_kPa", "pressure_fit_kPa", "pressure_thesis_fit_kPa",
-              "residual_fit_kPa"], rows, comparison,
+        fig,
+        [
+            "sinkage_m",
+            "pressure_kPa",
+            "pressure_fit_kPa",
+            "pressure_thesis_fit_kPa",
+            "residual_fit_kPa",
+        ],
+        rows,
+        comparison,
         verdict=f"reproduced: n = {n_fit:.4f} (thesis 1.0707), k_eq "
-                f"{100 * (k_eq / k_eq_thesis - 1):+.3f} % from the thesis's fit")
+        f"{100 * (k_eq / k_eq_thesis - 1):+.3f} % from the thesis's fit",
+    )
 
 
 def _fig_2_2(ctx: _Context) -> FigureResult:
@@ -260,16 +281,23 @@ def _fig_2_2(ctx: _Context) -> FigureResult:
         "lab snow, thesis fit (Table 2.1)": sj.BekkerSoil.thesis_lab_snow(),
     }
     wong = sj.WongSnow.thesis_plate_rule_snow()
-    curves = {name: np.asarray(sj.bekker_pressure(zz, b, s.k_c, s.k_phi, s.n))
-              for name, s in soils.items()}
+    curves = {
+        name: np.asarray(sj.bekker_pressure(zz, b, s.k_c, s.k_phi, s.n))
+        for name, s in soils.items()
+    }
     z_wong = zz[zz < 0.99 * float(wong.z_w)]
     p_wong = np.asarray(sj.wong_pressure(z_wong, wong.p_w, wong.z_w))
 
     fig, ax = _subplots(figsize=(6.4, 4.4))
     for k, (name, pr) in enumerate(curves.items()):
         ax.plot(zz * 100, pr / 1e3, "-", color=f"C{k}", label=f"{name} (2.1)")
-    ax.plot(z_wong * 100, p_wong / 1e3, "--", color="k",
-            label="shallow snow, Wong (2.3): p_w = 12.9 kPa, z_w = 0.20 m")
+    ax.plot(
+        z_wong * 100,
+        p_wong / 1e3,
+        "--",
+        color="k",
+        label="shallow snow, Wong (2.3): p_w = 12.9 kPa, z_w = 0.20 m",
+    )
     ax.set_ylim(0, 60)
     ax.set_xlabel("sinkage z [cm]")
     ax.set_ylabel("pressure p [kPa]")
@@ -295,9 +323,14 @@ def _fig_2_2(ctx: _Context) -> FigureResult:
         "without bound towards its base at z_w = 20 cm, the finite-depth behaviour the "
         "thesis uses in chapter 4."
     )
-    return FigureResult(fig, ["sinkage_m"] + [f"{n} [kPa]" for n in names], rows, comparison,
-                        verdict="drawn with assumed snows (Wong's Table 2.3); the lab snow is "
-                                "the stiffest and has no asymptote, as the thesis says")
+    return FigureResult(
+        fig,
+        ["sinkage_m"] + [f"{n} [kPa]" for n in names],
+        rows,
+        comparison,
+        verdict="drawn with assumed snows (Wong's Table 2.3); the lab snow is "
+        "the stiffest and has no asymptote, as the thesis says",
+    )
 
 
 # ----------------------------------------------------------------------------------------
@@ -329,11 +362,21 @@ def _fig_3_1(ctx: _Context) -> FigureResult:
     ax1.grid(alpha=0.3)
     ax1.set_title(f"(a) normalised slips, F_z = 5 kN, α = {SLIP_ANGLE_DEG:g}°", fontsize=9)
     t = np.linspace(0, np.pi / 2, 60)
-    ax2.plot(mu_x * np.cos(t), mu_y * np.sin(t), "-", color="k",
-             label=f"friction ellipse μ_x = {mu_x:.3f}, μ_y = {mu_y:.3f}")
+    ax2.plot(
+        mu_x * np.cos(t),
+        mu_y * np.sin(t),
+        "-",
+        color="k",
+        label=f"friction ellipse μ_x = {mu_x:.3f}, μ_y = {mu_y:.3f}",
+    )
     for k, a in enumerate(SLIP_ANGLES_DEG):
-        ax2.plot(np.asarray(f.fx_combined[k]) / load, np.asarray(f.fy_combined[k]) / load,
-                 "-", color=f"C{k}", label=f"combined force / F_z, α = {a:g}°")
+        ax2.plot(
+            np.asarray(f.fx_combined[k]) / load,
+            np.asarray(f.fy_combined[k]) / load,
+            "-",
+            color=f"C{k}",
+            label=f"combined force / F_z, α = {a:g}°",
+        )
     ax2.set_xlabel("F_x / F_z [-]")
     ax2.set_ylabel("F_y / F_z [-]")
     ax2.set_aspect("equal")
@@ -341,8 +384,7 @@ def _fig_3_1(ctx: _Context) -> FigureResult:
     ax2.legend(fontsize=7, loc="upper right")
     ax2.grid(alpha=0.3)
     ax2.set_title("(b) combined force on the friction ellipse (slip 0…1)", fontsize=9)
-    fig.suptitle("Fig. 3.1 (cf. thesis): friction coefficients and normalised slips",
-                 fontsize=10)
+    fig.suptitle("Fig. 3.1 (cf. thesis): friction coefficients and normalised slips", fontsize=10)
     fig.tight_layout()
     rows = [[s, a, b_, c] for s, a, b_, c in zip(slips, phi_x, phi_y, phi)]
     fx_n = np.asarray(f.fx_combined) / (mu_x * load)
@@ -358,9 +400,14 @@ def _fig_3_1(ctx: _Context) -> FigureResult:
         f"ellipse with semi-axes μ_x F_z, μ_y F_z: max (F_x/μ_xF_z)² + (F_y/μ_yF_z)² = "
         f"{ell:.4f} ≤ 1, as N(φ) ≤ 1 requires."
     )
-    return FigureResult(fig, ["slip", "phi_x", "phi_y", "phi"], rows, comparison,
-                        verdict="a sketch in the thesis; the quantities drawn from (3.7)–(3.9) "
-                                "are consistent with it (force inside the friction ellipse)")
+    return FigureResult(
+        fig,
+        ["slip", "phi_x", "phi_y", "phi"],
+        rows,
+        comparison,
+        verdict="a sketch in the thesis; the quantities drawn from (3.7)–(3.9) "
+        "are consistent with it (force inside the friction ellipse)",
+    )
 
 
 def _load_function_figure(ctx, number, title, quantities, equations_text):
@@ -400,49 +447,76 @@ def _fig_3_3(ctx):
     import snowjax as sj
 
     fig, cols, rows, tc, tr, worst = _load_function_figure(
-        ctx, "3.3", "tyre stiffness",
-        [("C_s", 0, sj.longitudinal_stiffness, 1e3, "[kN/rad]"),
-         ("C_α", 1, sj.lateral_stiffness, 1e3, "[kN/rad]")],
-        "(3.17), (3.18)")
+        ctx,
+        "3.3",
+        "tyre stiffness",
+        [
+            ("C_s", 0, sj.longitudinal_stiffness, 1e3, "[kN/rad]"),
+            ("C_α", 1, sj.lateral_stiffness, 1e3, "[kN/rad]"),
+        ],
+        "(3.17), (3.18)",
+    )
     comparison = (
-        "The thesis says the fitted functions reproduce the FEA data \"well in both "
-        "magnitude and trend\". With the published coefficients the largest deviations "
+        'The thesis says the fitted functions reproduce the FEA data "well in both '
+        'magnitude and trend". With the published coefficients the largest deviations '
         f"from Table 3.2 are {worst[0][1]:.1f} % for C_s (at {worst[0][2]:g} kN) and "
         f"{worst[1][1]:.1f} % for C_α (at {worst[1][2]:g} kN). The form F_z/(A + B F_z) "
         "is concave and cannot follow the table's jump between 6.24 and 7.5 kN (C_s rises "
         "by 16 % there after 2 % over the previous 1.7 kN), so the fit passes through the "
         "middle of the points; the trend (increasing C, decreasing C/F_z) is right."
     )
-    return FigureResult(fig, cols, rows, comparison, tc, tr,
-                        verdict=f"trend reproduced; fit within {worst[0][1]:.1f} % (C_s) and "
-                                f"{worst[1][1]:.1f} % (C_α) of Table 3.2")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        tc,
+        tr,
+        verdict=f"trend reproduced; fit within {worst[0][1]:.1f} % (C_s) and "
+        f"{worst[1][1]:.1f} % (C_α) of Table 3.2",
+    )
 
 
 def _fig_3_4(ctx):
     import snowjax as sj
 
     fig, cols, rows, tc, tr, worst = _load_function_figure(
-        ctx, "3.4", "friction coefficient",
-        [("μ_x", 2, sj.longitudinal_friction, 1.0, "[-]"),
-         ("μ_y", 3, sj.lateral_friction, 1.0, "[-]")],
-        "(3.19), (3.20)")
+        ctx,
+        "3.4",
+        "friction coefficient",
+        [
+            ("μ_x", 2, sj.longitudinal_friction, 1.0, "[-]"),
+            ("μ_y", 3, sj.lateral_friction, 1.0, "[-]"),
+        ],
+        "(3.19), (3.20)",
+    )
     comparison = (
         "The thesis shows the quadratic fits (3.19), (3.20) on the FEA friction "
         "coefficients. We reproduce that agreement: the largest deviations from Table 3.2 "
         f"are {worst[0][1]:.2f} % (μ_x, {worst[0][2]:g} kN) and {worst[1][1]:.2f} % "
         f"(μ_y, {worst[1][2]:g} kN). Both decrease with load, μ_y faster than μ_x."
     )
-    return FigureResult(fig, cols, rows, comparison, tc, tr,
-                        verdict=f"agrees: fit within {max(worst[0][1], worst[1][1]):.2f} % of "
-                                "Table 3.2")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        tc,
+        tr,
+        verdict=f"agrees: fit within {max(worst[0][1], worst[1][1]):.2f} % of Table 3.2",
+    )
 
 
 def _fig_3_5(ctx):
     import snowjax as sj
 
     fig, cols, rows, tc, tr, worst = _load_function_figure(
-        ctx, "3.5", "contact pressure constant",
-        [("E1", 4, sj.contact_pressure_constant, 1.0, "[-]")], "(3.21)")
+        ctx,
+        "3.5",
+        "contact pressure constant",
+        [("E1", 4, sj.contact_pressure_constant, 1.0, "[-]")],
+        "(3.21)",
+    )
     e1_35 = float(sj.contact_pressure_constant(3500.0))
     comparison = (
         "The thesis says the fitted E1 (3.21) matches the FEA data. With the published "
@@ -453,10 +527,17 @@ def _fig_3_5(ctx):
         "steep above 6 kN as the table is; a refit of Table 3.2 returns essentially the "
         "published coefficients, so this is the limit of the form, not a typo."
     )
-    return FigureResult(fig, cols, rows, comparison, tc, tr,
-                        verdict=f"partly: good at 6.24 kN, {worst[0][1]:.0f} % off at "
-                                f"{worst[0][2]:g} kN — the thesis's \"matches\" does not hold "
-                                "at light loads")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        tc,
+        tr,
+        verdict=f"partly: good at 6.24 kN, {worst[0][1]:.0f} % off at "
+        f'{worst[0][2]:g} kN — the thesis\'s "matches" does not hold '
+        "at light loads",
+    )
 
 
 def _fig_3_6(ctx):
@@ -477,8 +558,11 @@ def _fig_3_6(ctx):
     fig.tight_layout()
     rows = [[s, a, b_, c] for s, a, b_, c in zip(slips, st, fr, e1)]
     cross = np.nonzero((e1[1:] > st[1:]) & (e1[:-1] <= st[:-1]))[0]
-    cross_txt = (f"the E1 ratio overtakes the stiffness ratio at slip ≈ {slips[cross[0] + 1]:.2f}"
-                 if cross.size else "the E1 ratio never overtakes the stiffness ratio")
+    cross_txt = (
+        f"the E1 ratio overtakes the stiffness ratio at slip ≈ {slips[cross[0] + 1]:.2f}"
+        if cross.size
+        else "the E1 ratio never overtakes the stiffness ratio"
+    )
     fr_least = bool(np.all(fr[1:] <= np.minimum(st, e1)[1:]))
     slope_e1 = float(np.mean(np.diff(e1) > np.diff(st)))
     comparison = (
@@ -495,12 +579,17 @@ def _fig_3_6(ctx):
         "(E1): they are not small, because every numerator of the thesis's ratios also "
         "changes the load from F_z1 to F_z2, and near full slip F_x ≈ μ_x F_z; but the "
         "C_s and E1 curves meet there, i.e. the force no longer depends on which of the "
-        "two changed — our reading of \"sensitive to neither\"."
+        'two changed — our reading of "sensitive to neither".'
     )
     over = f"above slip {slips[cross[0] + 1]:.2f}" if cross.size else "nowhere"
-    return FigureResult(fig, ["slip", "ratio_c_s", "ratio_mu_x", "ratio_e1"], rows, comparison,
-                        verdict="positivity and 'friction least' confirmed; 'stiffness "
-                                f"greatest' fails {over}, where E1 overtakes it")
+    return FigureResult(
+        fig,
+        ["slip", "ratio_c_s", "ratio_mu_x", "ratio_e1"],
+        rows,
+        comparison,
+        verdict="positivity and 'friction least' confirmed; 'stiffness "
+        f"greatest' fails {over}, where E1 overtakes it",
+    )
 
 
 def _trend_figure(ctx, number, pname, label, unit, claim):
@@ -532,8 +621,13 @@ def _trend_figure(ctx, number, pname, label, unit, claim):
 
     fig, (ax1, ax2, ax3) = _subplots(1, 3, figsize=(13, 4.2))
     for k, name in enumerate(names):
-        ax1.plot(loads / 1e3, trends[name] / scale, "-", color=f"C{k}",
-                 label=f"{name}: {factors[k]:g} × increment of the fit")
+        ax1.plot(
+            loads / 1e3,
+            trends[name] / scale,
+            "-",
+            color=f"C{k}",
+            label=f"{name}: {factors[k]:g} × increment of the fit",
+        )
         ax2.plot(slips, variations[name], "-", color=f"C{k}", label=f"curve {name}")
         with np.errstate(divide="ignore", invalid="ignore"):
             rel = np.where(f_base > 0, variations[name] / f_base, np.nan)
@@ -550,19 +644,25 @@ def _trend_figure(ctx, number, pname, label, unit, claim):
     for ax in (ax1, ax2, ax3):
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.suptitle(f"Fig. {number} (cf. thesis): shear force variation for changed {label} "
-                 f"trends, F_z {f1 / 1e3:g} → {f2 / 1e3:g} kN", fontsize=10)
+    fig.suptitle(
+        f"Fig. {number} (cf. thesis): shear force variation for changed {label} "
+        f"trends, F_z {f1 / 1e3:g} → {f2 / 1e3:g} kN",
+        fontsize=10,
+    )
     fig.tight_layout()
     rows = [[s] + [float(variations[n][j]) for n in names] for j, s in enumerate(slips)]
     summary = "; ".join(
         f"curve {n}: ΔF_x peaks at {variations[n].max():.0f} N (slip "
         f"{slips[np.argmax(variations[n])]:.2f}), {variations[n][-1]:.0f} N at slip 1"
-        for n in names)
-    comparison = (claim + " We read the thesis's garbled definitions (\"F_x(F_z1, …) − "
-                  "12(random1)\") as: each curve is F_x(F_z2, parameters at F_z2) − "
-                  "F_x(F_z1, parameters at F_z1) by (3.11), with the studied parameter at "
-                  "F_z2 taken from its trend curve and the others from the load functions. "
-                  f"We find {summary}.")
+        for n in names
+    )
+    comparison = (
+        claim + " We read the thesis's garbled definitions (\"F_x(F_z1, …) − "
+        '12(random1)") as: each curve is F_x(F_z2, parameters at F_z2) − '
+        "F_x(F_z1, parameters at F_z1) by (3.11), with the studied parameter at "
+        "F_z2 taken from its trend curve and the others from the load functions. "
+        f"We find {summary}."
+    )
     return FigureResult(fig, ["slip"] + [f"delta_Fx_{n}_N" for n in names], rows, comparison)
 
 
@@ -571,50 +671,71 @@ _TREND_FIG = {"3.8": "3.7", "3.10": "3.9", "3.12": "3.11"}
 
 def _fig_3_8(ctx):
     res = _trend_figure(
-        ctx, "3.8", "c_s", "C_s", "[kN/rad]",
+        ctx,
+        "3.8",
+        "c_s",
+        "C_s",
+        "[kN/rad]",
         "Thesis (3.3.2): three stiffness trends OA < OB < OC (Fig. 3.7); the shear force "
         "variation increases for slips up to 0.2, decreases between 0.2 and 0.5 and is the "
         "same for all stiffnesses at full slip. The trends themselves are not given: B is "
         "the load function (3.17) from 3.5 to 10 kN, A and C scale its increment by 0.5 "
-        "and 2 (C_s/F_z still decreasing).")
+        "and 2 (C_s/F_z still decreasing).",
+    )
     v = np.array([r[1:] for r in res.rows])
     res.comparison += (
         " Qualitatively confirmed: a stiffer trend gives a larger variation at small "
         "slip, the curves rise to a peak and fall, and they converge at large slip "
         f"(spread {np.ptp(v[-1]):.0f} N at slip 1 vs {np.ptp(v, axis=1).max():.0f} N at "
-        "most).")
-    res.verdict = ("confirmed: stiffer trend → larger variation at small slip, peak then "
-                   "decline, one common value at full slip")
+        "most)."
+    )
+    res.verdict = (
+        "confirmed: stiffer trend → larger variation at small slip, peak then "
+        "decline, one common value at full slip"
+    )
     return res
 
 
 def _fig_3_10(ctx):
     res = _trend_figure(
-        ctx, "3.10", "e1", "E1", "[-]",
+        ctx,
+        "3.10",
+        "e1",
+        "E1",
+        "[-]",
         "Thesis (3.3.3): for steeper E1 trends (Fig. 3.9) the slope of the relative shear "
         "force increases up to slip 0.6, and at full slip all curves coincide. The trends "
         "are not given: B is the load function (3.21) from 3.5 to 10 kN, A and C scale "
-        "its increment by 0.5 and 1.3 (C stays below the bound E1 = 0.5 of Table 3.1).")
+        "its increment by 0.5 and 1.3 (C stays below the bound E1 = 0.5 of Table 3.1).",
+    )
     v = np.array([r[1:] for r in res.rows])
     res.comparison += (
         " Confirmed in trend: a steeper E1 trend gives a larger variation at "
         f"intermediate slip (at slip 0.5: {', '.join(f'{x:.0f}' for x in v[len(v) // 2])} N "
         "for A, B, C), and the curves approach each other at high slip "
-        f"(spread {np.ptp(v[-1]):.0f} N at slip 1).")
-    res.verdict = ("confirmed: steeper E1 trend → larger (relative) variation up to slip "
-                   "≈ 0.6, common value at full slip")
+        f"(spread {np.ptp(v[-1]):.0f} N at slip 1)."
+    )
+    res.verdict = (
+        "confirmed: steeper E1 trend → larger (relative) variation up to slip "
+        "≈ 0.6, common value at full slip"
+    )
     return res
 
 
 def _fig_3_12(ctx):
     res = _trend_figure(
-        ctx, "3.12", "mu_x", "μ_x", "[-]",
+        ctx,
+        "3.12",
+        "mu_x",
+        "μ_x",
+        "[-]",
         "Thesis (3.3.4): curve b is (3.19) from 0.3938 to 0.1696 (3.5 to 10 kN); a lies "
-        "above, c below (Fig. 3.11). For c the relative shear force is \"unstable\" at "
+        'above, c below (Fig. 3.11). For c the relative shear force is "unstable" at '
         "slips up to 0.25 and then increases; at full slip it is constant. We take a and "
         "c as 0.5 and 1.1 times b's decrease (with 1.1, μ_x F_z at 10 kN stays above its "
         "3.5 kN value, as the thesis requires of the trends). Note that (3.19) itself "
-        "does not increase μ_x F_z monotonically: μ_x F_z peaks at about 7.3 kN.")
+        "does not increase μ_x F_z monotonically: μ_x F_z peaks at about 7.3 kN.",
+    )
     v = np.array([r[1:] for r in res.rows])
     sl = np.array([r[0] for r in res.rows])
     c = v[:, 2]
@@ -623,16 +744,22 @@ def _fig_3_12(ctx):
     res.comparison += (
         f" Curve c rises to {c[k_pk]:.0f} N at slip {sl[k_pk]:.2f}, falls to "
         f"{c[k_min]:.0f} N at slip {sl[k_min]:.2f}"
-        + (f" and recovers to {c[-1]:.0f} N at slip 1" if k_min < len(c) - 1
-           else " (its value at slip 1)")
+        + (
+            f" and recovers to {c[-1]:.0f} N at slip 1"
+            if k_min < len(c) - 1
+            else " (its value at slip 1)"
+        )
         + ": the early turn matches the thesis's change of behaviour near slip 0.25 (we "
-        "read \"unstable\" as this non-monotonic stretch), but it then falls instead of "
+        'read "unstable" as this non-monotonic stretch), but it then falls instead of '
         "rising: the low friction at F_z2 saturates the tyre early, and near full slip "
         "only μ_x2 F_z2 − μ_x1 F_z1 is left. A higher friction trend (a) gives a larger "
         f"variation at every slip ({v[-1, 0]:.0f} N at slip 1), and all three curves are "
-        "flat near full slip (constant, as the thesis says).")
-    res.verdict = ("partly: a > b > c and constant at full slip confirmed; c turns near slip "
-                   "0.2 but then falls instead of rising")
+        "flat near full slip (constant, as the thesis says)."
+    )
+    res.verdict = (
+        "partly: a > b > c and constant at full slip confirmed; c turns near slip "
+        "0.2 but then falls instead of rising"
+    )
     return res
 
 
@@ -647,13 +774,20 @@ def _fig_3_13(ctx):
     fig, (ax1, ax2) = _subplots(1, 2, figsize=(11, 4.4))
     for k, a in enumerate(SLIP_ANGLES_DEG):
         ax1.plot(slips, np.asarray(f5.pure[k]), "-", color=f"C{k}", label=f"F_pure, α = {a:g}°")
-        ax1.plot(slips, np.asarray(f5.combined[k]), "--", color=f"C{k}",
-                 label=f"F_combined, α = {a:g}°")
+        ax1.plot(
+            slips, np.asarray(f5.combined[k]), "--", color=f"C{k}", label=f"F_combined, α = {a:g}°"
+        )
     for k, load in enumerate(loads):
-        ax2.plot(slips, np.asarray(fl.pure[k]), "-", color=f"C{k}",
-                 label=f"F_pure, {load / 1e3:g} kN")
-        ax2.plot(slips, np.asarray(fl.combined[k]), "--", color=f"C{k}",
-                 label=f"F_combined, {load / 1e3:g} kN")
+        ax2.plot(
+            slips, np.asarray(fl.pure[k]), "-", color=f"C{k}", label=f"F_pure, {load / 1e3:g} kN"
+        )
+        ax2.plot(
+            slips,
+            np.asarray(fl.combined[k]),
+            "--",
+            color=f"C{k}",
+            label=f"F_combined, {load / 1e3:g} kN",
+        )
     ax1.set_title("(a) F_z = 5 kN, several slip angles", fontsize=9)
     ax2.set_title(f"(b) α = {SLIP_ANGLE_DEG:g}°, several loads", fontsize=9)
     for ax in (ax1, ax2):
@@ -664,16 +798,29 @@ def _fig_3_13(ctx):
     fig.suptitle("Fig. 3.13 (cf. thesis): |F_pure| (3.13) vs |F_combined| (3.16)", fontsize=10)
     fig.tight_layout()
     pure, comb = np.asarray(f5.pure), np.asarray(f5.combined)
-    rows = [[s] + [float(pure[k, j]) for k in range(len(angles))]
-            + [float(comb[k, j]) for k in range(len(angles))] for j, s in enumerate(slips)]
-    cols = (["slip"] + [f"F_pure_alpha{a:g}deg_N" for a in SLIP_ANGLES_DEG]
-            + [f"F_combined_alpha{a:g}deg_N" for a in SLIP_ANGLES_DEG])
-    diff = np.concatenate([(pure - comb).ravel(), (np.asarray(fl.pure) - np.asarray(fl.combined)).ravel()])
+    rows = [
+        [s]
+        + [float(pure[k, j]) for k in range(len(angles))]
+        + [float(comb[k, j]) for k in range(len(angles))]
+        for j, s in enumerate(slips)
+    ]
+    cols = (
+        ["slip"]
+        + [f"F_pure_alpha{a:g}deg_N" for a in SLIP_ANGLES_DEG]
+        + [f"F_combined_alpha{a:g}deg_N" for a in SLIP_ANGLES_DEG]
+    )
+    diff = np.concatenate(
+        [(pure - comb).ravel(), (np.asarray(fl.pure) - np.asarray(fl.combined)).ravel()]
+    )
     inc_pure = bool(np.all(np.diff(pure, axis=0) >= -1e-9))
     dec_comb = np.all(np.diff(comb, axis=0) <= 1e-9, axis=0)
-    first_dec = slips[np.argmax(dec_comb & (slips > 0))] if np.any(dec_comb & (slips > 0)) else float("nan")
-    load_inc = bool(np.all(np.diff(np.asarray(fl.pure), axis=0) >= -1e-9)
-                    and np.all(np.diff(np.asarray(fl.combined), axis=0) >= -1e-9))
+    first_dec = (
+        slips[np.argmax(dec_comb & (slips > 0))] if np.any(dec_comb & (slips > 0)) else float("nan")
+    )
+    load_inc = bool(
+        np.all(np.diff(np.asarray(fl.pure), axis=0) >= -1e-9)
+        and np.all(np.diff(np.asarray(fl.combined), axis=0) >= -1e-9)
+    )
     comparison = (
         "Thesis (3.4.1): F_pure is always greater than F_combined; at constant load, as the "
         "slip angle increases F_pure increases whereas F_combined decreases; at constant "
@@ -687,9 +834,14 @@ def _fig_3_13(ctx):
         "larger slips. Increase with load at α = 10°: "
         f"{'confirmed at every slip' if load_inc else 'not at every slip'}."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="F_pure ≥ F_combined and growth with load confirmed; "
-                                f"'F_combined decreases with α' only for slip ≥ {first_dec:.2f}")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="F_pure ≥ F_combined and growth with load confirmed; "
+        f"'F_combined decreases with α' only for slip ≥ {first_dec:.2f}",
+    )
 
 
 def _fig_3_14(ctx):
@@ -711,8 +863,11 @@ def _fig_3_14(ctx):
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()
     rows = [[s] + list(bp[:, j]) + list(bc[:, j]) for j, s in enumerate(slips)]
-    cols = (["slip"] + [f"beta_pure_{l / 1e3:g}kN_deg" for l in loads]
-            + [f"beta_combined_{l / 1e3:g}kN_deg" for l in loads])
+    cols = (
+        ["slip"]
+        + [f"beta_pure_{l / 1e3:g}kN_deg" for l in loads]
+        + [f"beta_combined_{l / 1e3:g}kN_deg" for l in loads]
+    )
     j = 1
     mid = lambda b: float(np.interp(45.0, b[::-1], slips[::-1]))  # b decreasing in slip
     comparison = (
@@ -728,9 +883,14 @@ def _fig_3_14(ctx):
         f"Load influence over 3.5–7.5 kN: β_combined varies by ≤ {np.ptp(bc[:, 1:], axis=0).max():.2f}°, "
         f"β_pure by ≤ {np.ptp(bp[:, 1:], axis=0).max():.2f}° (small, but not nil)."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict=f"β_combined 90° → 45° (slip {mid(bc[1]):.2f}) → 0° confirmed; "
-                                f"β_pure ends at {bp[1, -1]:.0f}°, not 0°; load effect small")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"β_combined 90° → 45° (slip {mid(bc[1]):.2f}) → 0° confirmed; "
+        f"β_pure ends at {bp[1, -1]:.0f}°, not 0°; load effect small",
+    )
 
 
 def _fig_3_15(ctx):
@@ -751,8 +911,11 @@ def _fig_3_15(ctx):
     ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     fig.tight_layout()
     rows = [[a] + list(bp[:, j]) + list(bc[:, j]) for j, a in enumerate(alphas)]
-    cols = (["alpha_deg"] + [f"beta_pure_i{s:g}_deg" for s in slips]
-            + [f"beta_combined_i{s:g}_deg" for s in slips])
+    cols = (
+        ["alpha_deg"]
+        + [f"beta_pure_i{s:g}_deg" for s in slips]
+        + [f"beta_combined_i{s:g}_deg" for s in slips]
+    )
     comparison = (
         "The thesis shows the orientation of the pure and combined forces against slip "
         "angle without further comment (section 3.4.2). Load and slips are not given; we "
@@ -765,9 +928,13 @@ def _fig_3_15(ctx):
         "stays far below β_pure, because the (1 − i) factor of (3.8) shrinks the lateral "
         "slip while the pure lateral force (3.12) ignores the slip."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="no claim in the thesis to check; both directions rise "
-                                "monotonically with α")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="no claim in the thesis to check; both directions rise monotonically with α",
+    )
 
 
 def _fig_3_16(ctx):
@@ -783,14 +950,35 @@ def _fig_3_16(ctx):
     fig, (ax1, ax2) = _subplots(1, 2, figsize=(11, 4.4))
     for k, load in enumerate(loads):
         for f, name, ls in ((fa, "anisotropic", "-"), (fi, "isotropic", "--")):
-            ax1.plot(slips, np.asarray(f.pure[k]), ls, color=f"C{2 * k}",
-                     label=f"F_pure, {name}, {load / 1e3:g} kN")
-            ax1.plot(slips, np.asarray(f.combined[k]), ls, color=f"C{2 * k + 1}",
-                     label=f"F_combined, {name}, {load / 1e3:g} kN")
-            ax2.plot(slips[1:], np.degrees(np.asarray(f.beta_combined[k]))[1:], ls,
-                     color=f"C{2 * k + 1}", label=f"β_combined, {name}, {load / 1e3:g} kN")
-            ax2.plot(slips[1:], np.degrees(np.asarray(f.beta_pure[k]))[1:], ls,
-                     color=f"C{2 * k}", lw=0.8, label=f"β_pure, {name}, {load / 1e3:g} kN")
+            ax1.plot(
+                slips,
+                np.asarray(f.pure[k]),
+                ls,
+                color=f"C{2 * k}",
+                label=f"F_pure, {name}, {load / 1e3:g} kN",
+            )
+            ax1.plot(
+                slips,
+                np.asarray(f.combined[k]),
+                ls,
+                color=f"C{2 * k + 1}",
+                label=f"F_combined, {name}, {load / 1e3:g} kN",
+            )
+            ax2.plot(
+                slips[1:],
+                np.degrees(np.asarray(f.beta_combined[k]))[1:],
+                ls,
+                color=f"C{2 * k + 1}",
+                label=f"β_combined, {name}, {load / 1e3:g} kN",
+            )
+            ax2.plot(
+                slips[1:],
+                np.degrees(np.asarray(f.beta_pure[k]))[1:],
+                ls,
+                color=f"C{2 * k}",
+                lw=0.8,
+                label=f"β_pure, {name}, {load / 1e3:g} kN",
+            )
     ax1.set_ylabel("|F| [N]")
     ax2.set_ylabel("force direction β [deg]")
     for ax, loc in ((ax1, "lower right"), (ax2, "upper right")):
@@ -799,15 +987,36 @@ def _fig_3_16(ctx):
         ax.legend(fontsize=6, ncol=2, loc=loc)
     ax1.set_title("(a) force magnitudes", fontsize=9)
     ax2.set_title("(b) force directions", fontsize=9)
-    fig.suptitle(f"Fig. 3.16 (cf. thesis): isotropic (μ_y = μ_x) vs anisotropic friction, "
-                 f"α = {SLIP_ANGLE_DEG:g}°", fontsize=10)
+    fig.suptitle(
+        f"Fig. 3.16 (cf. thesis): isotropic (μ_y = μ_x) vs anisotropic friction, "
+        f"α = {SLIP_ANGLE_DEG:g}°",
+        fontsize=10,
+    )
     fig.tight_layout()
-    rows = [[s, float(fa.pure[0, j]), float(fa.combined[0, j]), float(fi.pure[0, j]),
-             float(fi.combined[0, j]), math.degrees(float(fa.beta_combined[0, j])),
-             math.degrees(float(fi.beta_combined[0, j]))] for j, s in enumerate(slips)]
-    cols = ["slip", "F_pure_aniso_3.5kN_N", "F_comb_aniso_3.5kN_N", "F_pure_iso_3.5kN_N",
-            "F_comb_iso_3.5kN_N", "beta_comb_aniso_3.5kN_deg", "beta_comb_iso_3.5kN_deg"]
-    d_mu = np.degrees(np.abs(np.asarray(fa.beta_combined) - np.asarray(fi.beta_combined)))[:, 1:].max()
+    rows = [
+        [
+            s,
+            float(fa.pure[0, j]),
+            float(fa.combined[0, j]),
+            float(fi.pure[0, j]),
+            float(fi.combined[0, j]),
+            math.degrees(float(fa.beta_combined[0, j])),
+            math.degrees(float(fi.beta_combined[0, j])),
+        ]
+        for j, s in enumerate(slips)
+    ]
+    cols = [
+        "slip",
+        "F_pure_aniso_3.5kN_N",
+        "F_comb_aniso_3.5kN_N",
+        "F_pure_iso_3.5kN_N",
+        "F_comb_iso_3.5kN_N",
+        "beta_comb_aniso_3.5kN_deg",
+        "beta_comb_iso_3.5kN_deg",
+    ]
+    d_mu = np.degrees(np.abs(np.asarray(fa.beta_combined) - np.asarray(fi.beta_combined)))[
+        :, 1:
+    ].max()
     d_load = np.degrees(np.ptp(np.asarray(fa.beta_combined), axis=0))[1:].max()
     d_pure = np.degrees(np.abs(np.asarray(fa.beta_pure) - np.asarray(fi.beta_pure)))[:, 1:].max()
     ge = bool(np.all(np.asarray(fi.pure) - np.asarray(fi.combined) >= -1e-9))
@@ -822,9 +1031,14 @@ def _fig_3_16(ctx):
         "(through C_α/C_s). The isotropic tyre has the larger lateral force and "
         f"F_pure ≥ F_combined still holds ({ge})."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict=f"confirmed: β_combined independent of μ (|Δβ| = {d_mu:.1g}°) "
-                                f"and nearly of load (≤ {d_load:.2f}°)")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"confirmed: β_combined independent of μ (|Δβ| = {d_mu:.1g}°) "
+        f"and nearly of load (≤ {d_load:.2f}°)",
+    )
 
 
 # ----------------------------------------------------------------------------------------
@@ -889,12 +1103,16 @@ def _derivative_figure(ctx, number, field, zoom):
         axes[1].set_ylim(lo - pad, hi + pad)
     axes[1].legend(fontsize=6, ncol=2, loc="best")
     how = "" if field == "tau" else "autodiff, "
-    fig.suptitle(f"Fig. {number} (cf. thesis): {short} vs σ̄ of both models at several slips "
-                 f"({how}Table 4.1 constants)", fontsize=10)
+    fig.suptitle(
+        f"Fig. {number} (cf. thesis): {short} vs σ̄ of both models at several slips "
+        f"({how}Table 4.1 constants)",
+        fontsize=10,
+    )
     fig.tight_layout()
     rows = [[x] + list(c[j]) + list(s[j]) for j, x in enumerate(sigma)]
-    cols = (["sigma_bar"] + [f"classic_i{i:g}" for i in slips]
-            + [f"simplified_i{i:g}" for i in slips])
+    cols = (
+        ["sigma_bar"] + [f"classic_i{i:g}" for i in slips] + [f"simplified_i{i:g}" for i in slips]
+    )
     return fig, cols, rows, sigma, slips, c, s
 
 
@@ -904,7 +1122,8 @@ _DERIV_CAPTION = (
     "constants of Table 4.1 (z_w/D = 0.2717, c/p_w = 0.2165, u_k = 73.6, tan φ = 0.0787); "
     "σ̄ runs from the entry point (0) to the axle (σ̄_n0). Solid: classic model (4.12); "
     "dashed: simplified model (4.13). The thesis does not list its slips; we use "
-    + ", ".join(f"{s:g}" for s in DERIVATIVE_SLIPS) + "."
+    + ", ".join(f"{s:g}" for s in DERIVATIVE_SLIPS)
+    + "."
 )
 
 
@@ -925,9 +1144,14 @@ def _fig_4_2(ctx):
         "dσ̄/dθ = 0 at θ = 0 while dτ̄/dθ ≠ 0); the factor exp(−u_k J0) makes this visible "
         "only in the last fraction of a percent of the σ̄ range (panel b)."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="confirmed (positive, → tan φ, y1(0) grows with slip, models "
-                                "agree); classic y1 diverges at the axle for i > 0")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="confirmed (positive, → tan φ, y1(0) grows with slip, models "
+        "agree); classic y1 diverges at the axle for i > 0",
+    )
 
 
 def _fig_4_3(ctx):
@@ -951,9 +1175,14 @@ def _fig_4_3(ctx):
         f"{min(s.max(), 0.0):.1g}); the classic y2 reaches {c[body].max():.2g} away from the "
         "axle and becomes positive and diverges at the axle for i > 0 (see Fig. 4.2)."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="confirmed (negative, ≈ 0 beyond σ̄ ≈ 2, models agree) except "
-                                "right at the axle (classic, i > 0)")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="confirmed (negative, ≈ 0 beyond σ̄ ≈ 2, models agree) except "
+        "right at the axle (classic, i > 0)",
+    )
 
 
 def _fig_4_4(ctx):
@@ -968,16 +1197,22 @@ def _fig_4_4(ctx):
         f"{', '.join(f'{x:.3f}' for x in pk_s)} (simplified) for i = "
         f"{', '.join(f'{x:g}' for x in slips)}, at σ̄ ≈ "
         f"{', '.join(f'{sigma[np.argmax(c[:, k])]:.2f}' for k in range(len(slips)))} (classic). "
-        + ("The classic peak is the higher one at every slip (confirmed). "
-           if np.all(pk_c >= pk_s) else
-           "The classic peak is not the higher one at every slip. ")
+        + (
+            "The classic peak is the higher one at every slip (confirmed). "
+            if np.all(pk_c >= pk_s)
+            else "The classic peak is not the higher one at every slip. "
+        )
         + "Both peaks fall with slip, since a larger slip saturates the shear stress at "
         "a smaller σ̄."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="confirmed (positive, single peak at small σ̄, "
-                                + ("classic peak higher)" if np.all(pk_c >= pk_s)
-                                   else "classic peak not always higher)"))
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="confirmed (positive, single peak at small σ̄, "
+        + ("classic peak higher)" if np.all(pk_c >= pk_s) else "classic peak not always higher)"),
+    )
 
 
 def _fig_4_5(ctx):
@@ -989,16 +1224,23 @@ def _fig_4_5(ctx):
         f"{', '.join(f'{x:.3f}' for x in c.min(axis=0))} (classic) vs "
         f"{', '.join(f'{x:.3f}' for x in s.min(axis=0))} (simplified) for i = "
         f"{', '.join(f'{x:g}' for x in slips)}"
-        + ("; the classic extreme is the larger one at every slip (confirmed)."
-           if np.all(c.min(axis=0) <= s.min(axis=0)) else
-           "; the classic extreme is the larger one except at i = "
-           + ", ".join(f"{x:g}" for x in slips[c.min(axis=0) > s.min(axis=0)]) + ".")
+        + (
+            "; the classic extreme is the larger one at every slip (confirmed)."
+            if np.all(c.min(axis=0) <= s.min(axis=0))
+            else "; the classic extreme is the larger one except at i = "
+            + ", ".join(f"{x:g}" for x in slips[c.min(axis=0) > s.min(axis=0)])
+            + "."
+        )
     )
     big = np.all(c.min(axis=0) <= s.min(axis=0))
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict="confirmed (negative, single extreme at small σ̄"
-                                + (", classic larger)" if big else
-                                   "); classic extreme not the larger one at every slip"))
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict="confirmed (negative, single extreme at small σ̄"
+        + (", classic larger)" if big else "); classic extreme not the larger one at every slip"),
+    )
 
 
 def _fig_4_6(ctx):
@@ -1013,8 +1255,13 @@ def _fig_4_6(ctx):
         f"{1 + 0.0787 * sigma[-1]:.2f} at the axle: the models agree closely (confirmed); "
         "both approach the Mohr–Coulomb line 1 + σ̄ tan φ, faster at higher slip."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict=f"confirmed: the models differ by ≤ {d.max():.3f} in τ̄ (≈ 1)")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"confirmed: the models differ by ≤ {d.max():.3f} in τ̄ (≈ 1)",
+    )
 
 
 # ----------------------------------------------------------------------------------------
@@ -1034,20 +1281,49 @@ def _wheel_sweep(ctx):
     res = {}
     for shear in WHEEL_SHEAR_MODELS:
         st = sj.solve_wheel(wheel, snow, loads[:, None], slips[None, :], shear)
-        res[shear] = {f: np.asarray(getattr(st, f)) for f in
-                      ("entry_angle", "sinkage", "motion_resistance", "thrust",
-                       "drawbar_pull", "torque", "status")}
+        res[shear] = {
+            f: np.asarray(getattr(st, f))
+            for f in (
+                "entry_angle",
+                "sinkage",
+                "motion_resistance",
+                "thrust",
+                "drawbar_pull",
+                "torque",
+                "status",
+            )
+        }
     rows = []
     for shear in WHEEL_SHEAR_MODELS:
         r = res[shear]
         for a, load in enumerate(loads):
             for b, slip in enumerate(slips):
-                rows.append([shear, load, slip, math.degrees(r["entry_angle"][a, b]),
-                             r["sinkage"][a, b], r["motion_resistance"][a, b],
-                             r["thrust"][a, b], r["drawbar_pull"][a, b], r["torque"][a, b],
-                             sj.Status(int(r["status"][a, b])).name])
-    cols = ["shear", "load_N", "slip", "entry_angle_deg", "sinkage_m", "motion_resistance_N",
-            "thrust_N", "drawbar_pull_N", "torque_Nm", "status"]
+                rows.append(
+                    [
+                        shear,
+                        load,
+                        slip,
+                        math.degrees(r["entry_angle"][a, b]),
+                        r["sinkage"][a, b],
+                        r["motion_resistance"][a, b],
+                        r["thrust"][a, b],
+                        r["drawbar_pull"][a, b],
+                        r["torque"][a, b],
+                        sj.Status(int(r["status"][a, b])).name,
+                    ]
+                )
+    cols = [
+        "shear",
+        "load_N",
+        "slip",
+        "entry_angle_deg",
+        "sinkage_m",
+        "motion_resistance_N",
+        "thrust_N",
+        "drawbar_pull_N",
+        "torque_Nm",
+        "status",
+    ]
     _write_csv(ctx.out / "wheel_sweep.csv", cols, rows)
     out = {"loads": loads, "slips": slips, "res": res, "wheel": wheel, "snow": snow}
     ctx.cache["wheel"] = out
@@ -1061,10 +1337,19 @@ def _wheel_figure(ctx, number, field, ylabel, scale, what, delta_label):
     for a, load in enumerate(loads):
         for shear in WHEEL_SHEAR_MODELS:
             y = scale * res[shear][field][a]
-            ax1.plot(slips, y, _STYLES[shear], color=f"C{a}",
-                     label=f"{load / 1e3:g} kN, {_MODEL_LABEL[shear]}")
-            ax2.plot(slips, (y - y[0]) * (10.0 if field == "sinkage" else 1.0),
-                     _STYLES[shear], color=f"C{a}")
+            ax1.plot(
+                slips,
+                y,
+                _STYLES[shear],
+                color=f"C{a}",
+                label=f"{load / 1e3:g} kN, {_MODEL_LABEL[shear]}",
+            )
+            ax2.plot(
+                slips,
+                (y - y[0]) * (10.0 if field == "sinkage" else 1.0),
+                _STYLES[shear],
+                color=f"C{a}",
+            )
     ax1.set_ylabel(ylabel)
     ax2.set_ylabel(delta_label)
     ax1.set_title(f"(a) {what}", fontsize=9)
@@ -1073,13 +1358,16 @@ def _wheel_figure(ctx, number, field, ylabel, scale, what, delta_label):
         ax.set_xlabel("slip i [-]")
         ax.grid(alpha=0.3)
     fig.legend(*ax1.get_legend_handles_labels(), loc="lower center", ncol=3, fontsize=7)
-    fig.suptitle(f"Fig. {number} (cf. thesis): {what} vs slip (4.14), thesis tyre on fresh "
-                 "snow", fontsize=10)
+    fig.suptitle(
+        f"Fig. {number} (cf. thesis): {what} vs slip (4.14), thesis tyre on fresh snow", fontsize=10
+    )
     fig.tight_layout(rect=(0, 0.14, 1, 1))
     rows = []
     for b, slip in enumerate(slips):
-        rows.append([slip] + [scale * res[sh][field][a, b] for a in range(len(loads))
-                              for sh in WHEEL_SHEAR_MODELS])
+        rows.append(
+            [slip]
+            + [scale * res[sh][field][a, b] for a in range(len(loads)) for sh in WHEEL_SHEAR_MODELS]
+        )
     unit = "cm" if field == "sinkage" else "N"
     cols = ["slip"] + [f"{sh}_{l / 1e3:g}kN_{unit}" for l in loads for sh in WHEEL_SHEAR_MODELS]
     statuses = {int(x) for sh in WHEEL_SHEAR_MODELS for x in res[sh]["status"].ravel()}
@@ -1099,16 +1387,17 @@ _WHEEL_CAPTION = (
 
 
 def _fig_4_7(ctx):
-    fig, cols, rows, statuses = _wheel_figure(ctx, "4.7", "sinkage", "sinkage z0 [cm]", 100.0,
-                                              "sinkage", "z0(i) − z0(0) [mm]")
+    fig, cols, rows, statuses = _wheel_figure(
+        ctx, "4.7", "sinkage", "sinkage z0 [cm]", 100.0, "sinkage", "z0(i) − z0(0) [mm]"
+    )
     w = _wheel_sweep(ctx)
     r = w["res"]
     z5 = {sh: 100 * r[sh]["sinkage"][1] for sh in WHEEL_SHEAR_MODELS}
     d = np.abs(z5["classic"] - z5["simplified"]).max()
     comparison = (
         "Thesis: the simplified model, the classic shear-displacement model, an upper-bound "
-        "method and FEA \"match well with each other and all the models are functions of "
-        "slip\"; the no-shear curve is a straight line (independent of slip). We reproduce "
+        'method and FEA "match well with each other and all the models are functions of '
+        'slip"; the no-shear curve is a straight line (independent of slip). We reproduce '
         "the two models and the no-shear line (FEA and upper-bound data are not given). "
         f"At 5 kN the no-shear sinkage is {z5['none'][0]:.2f} cm at every slip "
         f"(spread {np.ptp(z5['none']):.1e} cm, confirmed); with shear it is "
@@ -1123,15 +1412,26 @@ def _fig_4_7(ctx):
         "large u_k = 73.6, which mobilises most of the shear strength already at small "
         "slip. Statuses: " + ", ".join(sorted(_status_names(statuses))) + "."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict=f"no-shear line flat, models agree within {d:.2f} cm (confirmed); "
-                                "sinkage falls slightly with slip; FEA/upper bound not given")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"no-shear line flat, models agree within {d:.2f} cm (confirmed); "
+        "sinkage falls slightly with slip; FEA/upper bound not given",
+    )
 
 
 def _fig_4_8(ctx):
-    fig, cols, rows, statuses = _wheel_figure(ctx, "4.8", "motion_resistance",
-                                              "motion resistance R_x [N]", 1.0,
-                                              "motion resistance", "R_x(i) − R_x(0) [N]")
+    fig, cols, rows, statuses = _wheel_figure(
+        ctx,
+        "4.8",
+        "motion_resistance",
+        "motion resistance R_x [N]",
+        1.0,
+        "motion resistance",
+        "R_x(i) − R_x(0) [N]",
+    )
     w = _wheel_sweep(ctx)
     r = w["res"]
     m5 = {sh: r[sh]["motion_resistance"][1] for sh in WHEEL_SHEAR_MODELS}
@@ -1145,12 +1445,16 @@ def _fig_4_8(ctx):
         f"{m5['simplified'][0]:.0f} → {m5['simplified'][-1]:.0f} N from slip 0 to 1 "
         f"(max difference between the two models {d:.0f} N). Motion resistance (4.16) "
         "follows the sinkage: it is slip dependent with shear (the thesis's point) and "
-        "lower than without shear. Statuses: " + ", ".join(sorted(_status_names(statuses)))
-        + "."
+        "lower than without shear. Statuses: " + ", ".join(sorted(_status_names(statuses))) + "."
     )
-    return FigureResult(fig, cols, rows, comparison,
-                        verdict=f"no-shear line flat, models agree within {d:.0f} N (confirmed); "
-                                "R_x slip dependent with shear; FEA data not given")
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"no-shear line flat, models agree within {d:.0f} N (confirmed); "
+        "R_x slip dependent with shear; FEA data not given",
+    )
 
 
 def _status_names(codes):
@@ -1170,93 +1474,185 @@ def _fig_terrains(ctx):
 # ----------------------------------------------------------------------------------------
 
 FIGURES: tuple[FigureSpec, ...] = (
-    FigureSpec("2.1", "Bekker fit vs plate test data",
-               "Bekker's law (2.1) fitted by least squares to the 20 points of Table 2.1 "
-               "(Shoop's 23 cm plate in 200 kg/m³ snow), with the thesis's published fit "
-               "(k_c = 3.43 kN/m^(n+1), k_φ = 218.84 kN/m^(n+2), n = 1.0707). b is the "
-               "plate size of `snowjax.thesis_plate_test()`.",
-               ("2.1",), _fig_2_1),
-    FigureSpec("2.2", "pressure–sinkage curves of different snows",
-               "Bekker's law (2.1) for three snows of Wong (Theory of Ground Vehicles, "
-               "Table 2.3 — assumed: the thesis cites [1, 3, 7, 8] without listing the "
-               "constants) and the thesis's laboratory snow, for the 23 cm plate, plus "
-               "Wong's shallow-snow law (2.3) with p_w from the plate rule on Table 2.1.",
-               ("2.1", "2.3"), _fig_2_2),
-    FigureSpec("3.1", "friction coefficients and normalised slips",
-               "The thesis's Figure 3.1 is a sketch; drawn here: (a) normalised slips "
-               "φ_x (3.7), φ_y (3.8), φ (3.9) of the thesis tyre at 5 kN and α = 10° "
-               "(assumed operating point), (b) the combined force (3.14)–(3.15) over slip "
-               "0…1 inside the friction ellipse μ_x F_z, μ_y F_z.",
-               ("3.7", "3.8", "3.9", "3.10", "3.14", "3.15", "3.19", "3.20"), _fig_3_1),
-    FigureSpec("3.3", "tyre stiffness: fit vs FEA data",
-               "Load functions (3.17), (3.18) with the published coefficients (A4 = 0.2026, "
-               "A5 = 0.1516, B4 = 0.1936, B5 = 0.1190) vs the FEA values of Table 3.2.",
-               ("3.17", "3.18"), _fig_3_3),
-    FigureSpec("3.4", "friction coefficients: fit vs FEA data",
-               "Load functions (3.19), (3.20) with the published coefficients vs Table 3.2.",
-               ("3.19", "3.20"), _fig_3_4),
-    FigureSpec("3.5", "contact pressure constant: fit vs FEA data",
-               "Load function (3.21) with a1 = 7.5852e-9, a2 = 0.1203 vs Table 3.2.",
-               ("3.21",), _fig_3_5),
-    FigureSpec("3.6", "shear force variation ratios",
-               "Shear force variation ratios of section 3.3.1 (pure longitudinal slip, "
-               "3.11) due to C_s, μ_x and E1 between 3.5 and 7.5 kN (assumed: the ends of "
-               "the FEA load range; the thesis does not state the loads).",
-               ("3.10", "3.11", "3.17", "3.19", "3.21"), _fig_3_6),
-    FigureSpec("3.8", "shear force variation for changed stiffness trends",
-               "(a) Three C_s trends (cf. Fig. 3.7): B = (3.17), A and C with 0.5 and 2 "
-               "times its increment over 3.5–10 kN (assumed); (b) ΔF_x = F_x(10 kN) − "
-               "F_x(3.5 kN) by (3.11); (c) ΔF_x relative to F_x(3.5 kN).",
-               ("3.11", "3.17", "3.19", "3.21"), _fig_3_8),
-    FigureSpec("3.10", "shear force variation for changed contact-pressure-constant trends",
-               "(a) Three E1 trends (cf. Fig. 3.9): B = (3.21), A and C with 0.5 and 1.3 "
-               "times its increment over 3.5–10 kN (assumed); (b), (c) as in Fig. 3.8.",
-               ("3.10", "3.11", "3.21"), _fig_3_10),
-    FigureSpec("3.12", "shear force variation for changed friction trends",
-               "(a) Three μ_x trends (cf. Fig. 3.11): b = (3.19) from 0.3938 to 0.1696 over "
-               "3.5–10 kN (as in the thesis), a and c with 0.5 and 1.1 times its decrease "
-               "(assumed); (b), (c) as in Fig. 3.8.",
-               ("3.11", "3.19"), _fig_3_12),
-    FigureSpec("3.13", "|F_pure| vs |F_combined|",
-               "Pure (3.13) and combined (3.16) resultant shear forces vs driving slip: "
-               "(a) at 5 kN for α = 2, 5, 10, 20°; (b) at α = 10° for 3.5, 5, 7.5 kN "
-               "(assumed operating points). Load functions (3.17)–(3.21).",
-               ("3.7", "3.8", "3.9", "3.10", "3.11", "3.12", "3.13", "3.14", "3.15", "3.16"),
-               _fig_3_13),
-    FigureSpec("3.14", "force direction β vs slip",
-               "Direction of the pure and combined resultant forces vs slip at α = 10° for "
-               "3.5, 5, 7.5 kN (assumed).",
-               ("3.8", "3.11", "3.12", "3.14", "3.15"), _fig_3_14),
-    FigureSpec("3.15", "force direction β vs slip angle",
-               "Direction of the pure and combined resultant forces vs slip angle 0–30° at "
-               "5 kN for slips 0.05, 0.2, 0.5, 0.9 (assumed).",
-               ("3.8", "3.11", "3.12", "3.14", "3.15"), _fig_3_15),
-    FigureSpec("3.16", "isotropic vs anisotropic friction",
-               "Pure and combined forces and their directions for the thesis tyre "
-               "(anisotropic, μ_x ≠ μ_y from 3.19, 3.20) and an isotropic variant with "
-               "μ_y = μ_x (assumed), at α = 10° and 3.5 / 7.5 kN.",
-               ("3.13", "3.14", "3.15", "3.16", "3.19", "3.20"), _fig_3_16),
-    FigureSpec("4.2", "first derivative y1 = ∂τ̄/∂σ̄ of both models",
-               _DERIV_CAPTION, ("4.3", "4.5", "4.10", "4.12", "4.13", "Table 4.3",
-                                "Table 4.5"), _fig_4_2),
-    FigureSpec("4.3", "second derivative y2 = ∂²τ̄/∂σ̄² of both models",
-               _DERIV_CAPTION, ("4.12", "4.13", "Table 4.3", "Table 4.5"), _fig_4_3),
-    FigureSpec("4.4", "first derivative y3 = ∂τ̄/∂i of both models",
-               _DERIV_CAPTION, ("4.12", "4.13", "Table 4.3", "Table 4.5"), _fig_4_4),
-    FigureSpec("4.5", "second derivative y4 = ∂²τ̄/∂i² of both models",
-               _DERIV_CAPTION, ("4.12", "4.13", "Table 4.3", "Table 4.5"), _fig_4_5),
-    FigureSpec("4.6", "τ̄ vs σ̄ for both models",
-               _DERIV_CAPTION.replace("Computed by automatic differentiation (jax.grad / "
-                                      "jax.hessian) of τ̄(σ̄, i)", "τ̄(σ̄, i)"),
-               ("4.1", "4.5", "4.10", "4.12", "4.13"), _fig_4_6),
-    FigureSpec("4.7", "sinkage vs slip (classic, simplified, no shear)",
-               _WHEEL_CAPTION, ("4.1", "4.5", "4.10", "4.11", "4.13", "4.14", "4.15"),
-               _fig_4_7),
-    FigureSpec("4.8", "motion resistance vs slip (classic, simplified, no shear)",
-               _WHEEL_CAPTION, ("4.11", "4.13", "4.14", "4.16"), _fig_4_8),
-    FigureSpec("T.1", "terrain laws and stress distributions: sinkage and drawbar pull vs slip",
-               _TERRAIN_CAPTION, ("2.1", "2.3", "4.5", "4.10", "4.11", "4.14", "Wong–Reece 1967"),
-               _fig_terrains),
+    FigureSpec(
+        "2.1",
+        "Bekker fit vs plate test data",
+        "Bekker's law (2.1) fitted by least squares to the 20 points of Table 2.1 "
+        "(Shoop's 23 cm plate in 200 kg/m³ snow), with the thesis's published fit "
+        "(k_c = 3.43 kN/m^(n+1), k_φ = 218.84 kN/m^(n+2), n = 1.0707). b is the "
+        "plate size of `snowjax.thesis_plate_test()`.",
+        ("2.1",),
+        _fig_2_1,
+    ),
+    FigureSpec(
+        "2.2",
+        "pressure–sinkage curves of different snows",
+        "Bekker's law (2.1) for three snows of Wong (Theory of Ground Vehicles, "
+        "Table 2.3 — assumed: the thesis cites [1, 3, 7, 8] without listing the "
+        "constants) and the thesis's laboratory snow, for the 23 cm plate, plus "
+        "Wong's shallow-snow law (2.3) with p_w from the plate rule on Table 2.1.",
+        ("2.1", "2.3"),
+        _fig_2_2,
+    ),
+    FigureSpec(
+        "3.1",
+        "friction coefficients and normalised slips",
+        "The thesis's Figure 3.1 is a sketch; drawn here: (a) normalised slips "
+        "φ_x (3.7), φ_y (3.8), φ (3.9) of the thesis tyre at 5 kN and α = 10° "
+        "(assumed operating point), (b) the combined force (3.14)–(3.15) over slip "
+        "0…1 inside the friction ellipse μ_x F_z, μ_y F_z.",
+        ("3.7", "3.8", "3.9", "3.10", "3.14", "3.15", "3.19", "3.20"),
+        _fig_3_1,
+    ),
+    FigureSpec(
+        "3.3",
+        "tyre stiffness: fit vs FEA data",
+        "Load functions (3.17), (3.18) with the published coefficients (A4 = 0.2026, "
+        "A5 = 0.1516, B4 = 0.1936, B5 = 0.1190) vs the FEA values of Table 3.2.",
+        ("3.17", "3.18"),
+        _fig_3_3,
+    ),
+    FigureSpec(
+        "3.4",
+        "friction coefficients: fit vs FEA data",
+        "Load functions (3.19), (3.20) with the published coefficients vs Table 3.2.",
+        ("3.19", "3.20"),
+        _fig_3_4,
+    ),
+    FigureSpec(
+        "3.5",
+        "contact pressure constant: fit vs FEA data",
+        "Load function (3.21) with a1 = 7.5852e-9, a2 = 0.1203 vs Table 3.2.",
+        ("3.21",),
+        _fig_3_5,
+    ),
+    FigureSpec(
+        "3.6",
+        "shear force variation ratios",
+        "Shear force variation ratios of section 3.3.1 (pure longitudinal slip, "
+        "3.11) due to C_s, μ_x and E1 between 3.5 and 7.5 kN (assumed: the ends of "
+        "the FEA load range; the thesis does not state the loads).",
+        ("3.10", "3.11", "3.17", "3.19", "3.21"),
+        _fig_3_6,
+    ),
+    FigureSpec(
+        "3.8",
+        "shear force variation for changed stiffness trends",
+        "(a) Three C_s trends (cf. Fig. 3.7): B = (3.17), A and C with 0.5 and 2 "
+        "times its increment over 3.5–10 kN (assumed); (b) ΔF_x = F_x(10 kN) − "
+        "F_x(3.5 kN) by (3.11); (c) ΔF_x relative to F_x(3.5 kN).",
+        ("3.11", "3.17", "3.19", "3.21"),
+        _fig_3_8,
+    ),
+    FigureSpec(
+        "3.10",
+        "shear force variation for changed contact-pressure-constant trends",
+        "(a) Three E1 trends (cf. Fig. 3.9): B = (3.21), A and C with 0.5 and 1.3 "
+        "times its increment over 3.5–10 kN (assumed); (b), (c) as in Fig. 3.8.",
+        ("3.10", "3.11", "3.21"),
+        _fig_3_10,
+    ),
+    FigureSpec(
+        "3.12",
+        "shear force variation for changed friction trends",
+        "(a) Three μ_x trends (cf. Fig. 3.11): b = (3.19) from 0.3938 to 0.1696 over "
+        "3.5–10 kN (as in the thesis), a and c with 0.5 and 1.1 times its decrease "
+        "(assumed); (b), (c) as in Fig. 3.8.",
+        ("3.11", "3.19"),
+        _fig_3_12,
+    ),
+    FigureSpec(
+        "3.13",
+        "|F_pure| vs |F_combined|",
+        "Pure (3.13) and combined (3.16) resultant shear forces vs driving slip: "
+        "(a) at 5 kN for α = 2, 5, 10, 20°; (b) at α = 10° for 3.5, 5, 7.5 kN "
+        "(assumed operating points). Load functions (3.17)–(3.21).",
+        ("3.7", "3.8", "3.9", "3.10", "3.11", "3.12", "3.13", "3.14", "3.15", "3.16"),
+        _fig_3_13,
+    ),
+    FigureSpec(
+        "3.14",
+        "force direction β vs slip",
+        "Direction of the pure and combined resultant forces vs slip at α = 10° for "
+        "3.5, 5, 7.5 kN (assumed).",
+        ("3.8", "3.11", "3.12", "3.14", "3.15"),
+        _fig_3_14,
+    ),
+    FigureSpec(
+        "3.15",
+        "force direction β vs slip angle",
+        "Direction of the pure and combined resultant forces vs slip angle 0–30° at "
+        "5 kN for slips 0.05, 0.2, 0.5, 0.9 (assumed).",
+        ("3.8", "3.11", "3.12", "3.14", "3.15"),
+        _fig_3_15,
+    ),
+    FigureSpec(
+        "3.16",
+        "isotropic vs anisotropic friction",
+        "Pure and combined forces and their directions for the thesis tyre "
+        "(anisotropic, μ_x ≠ μ_y from 3.19, 3.20) and an isotropic variant with "
+        "μ_y = μ_x (assumed), at α = 10° and 3.5 / 7.5 kN.",
+        ("3.13", "3.14", "3.15", "3.16", "3.19", "3.20"),
+        _fig_3_16,
+    ),
+    FigureSpec(
+        "4.2",
+        "first derivative y1 = ∂τ̄/∂σ̄ of both models",
+        _DERIV_CAPTION,
+        ("4.3", "4.5", "4.10", "4.12", "4.13", "Table 4.3", "Table 4.5"),
+        _fig_4_2,
+    ),
+    FigureSpec(
+        "4.3",
+        "second derivative y2 = ∂²τ̄/∂σ̄² of both models",
+        _DERIV_CAPTION,
+        ("4.12", "4.13", "Table 4.3", "Table 4.5"),
+        _fig_4_3,
+    ),
+    FigureSpec(
+        "4.4",
+        "first derivative y3 = ∂τ̄/∂i of both models",
+        _DERIV_CAPTION,
+        ("4.12", "4.13", "Table 4.3", "Table 4.5"),
+        _fig_4_4,
+    ),
+    FigureSpec(
+        "4.5",
+        "second derivative y4 = ∂²τ̄/∂i² of both models",
+        _DERIV_CAPTION,
+        ("4.12", "4.13", "Table 4.3", "Table 4.5"),
+        _fig_4_5,
+    ),
+    FigureSpec(
+        "4.6",
+        "τ̄ vs σ̄ for both models",
+        _DERIV_CAPTION.replace(
+            "Computed by automatic differentiation (jax.grad / jax.hessian) of τ̄(σ̄, i)", "τ̄(σ̄, i)"
+        ),
+        ("4.1", "4.5", "4.10", "4.12", "4.13"),
+        _fig_4_6,
+    ),
+    FigureSpec(
+        "4.7",
+        "sinkage vs slip (classic, simplified, no shear)",
+        _WHEEL_CAPTION,
+        ("4.1", "4.5", "4.10", "4.11", "4.13", "4.14", "4.15"),
+        _fig_4_7,
+    ),
+    FigureSpec(
+        "4.8",
+        "motion resistance vs slip (classic, simplified, no shear)",
+        _WHEEL_CAPTION,
+        ("4.11", "4.13", "4.14", "4.16"),
+        _fig_4_8,
+    ),
+    FigureSpec(
+        "T.1",
+        "terrain laws and stress distributions: sinkage and drawbar pull vs slip",
+        _TERRAIN_CAPTION,
+        ("2.1", "2.3", "4.5", "4.10", "4.11", "4.14", "Wong–Reece 1967"),
+        _fig_terrains,
+    ),
 )
 
 
@@ -1297,10 +1693,14 @@ def _derivative_tables(ctx) -> tuple[str, list, list]:
         ("Table 4.3", "y2 ≈ −T0²(T1 + T2)²", "classic", "y2", t43.y2_squared),
         ("Table 4.3", "y3 = ½ J_k (1 + σ̄ tan φ)(sin θ0 − sin θ)", "classic", "y3", t43.y3),
         ("Table 4.3", "y4 = −½ u_k (sin θ0 − sin θ) y3", "classic", "y4", t43.y4),
-        ("Table 4.5", "y1 = tan φ + [U1(1 + σ̄ tan φ) − tan φ] e^(−U0)", "simplified", "y1",
-         t45.y1),
-        ("Table 4.5", "y2 = 2U1 tan φ e^(−U0) − (U1² − U2)(1 + σ̄ tan φ) e^(−U0)",
-         "simplified", "y2", t45.y2),
+        ("Table 4.5", "y1 = tan φ + [U1(1 + σ̄ tan φ) − tan φ] e^(−U0)", "simplified", "y1", t45.y1),
+        (
+            "Table 4.5",
+            "y2 = 2U1 tan φ e^(−U0) − (U1² − U2)(1 + σ̄ tan φ) e^(−U0)",
+            "simplified",
+            "y2",
+            t45.y2,
+        ),
         ("Table 4.5", "y3 = (1 + σ̄ tan φ) U3 e^(−U0)", "simplified", "y3", t45.y3),
         ("Table 4.5", "y4 = −(U3 − U4/U3) y3", "simplified", "y4", t45.y4),
     ]
@@ -1311,25 +1711,54 @@ def _derivative_tables(ctx) -> tuple[str, list, list]:
         rows.append([table, expr, model, field, r, verdict])
 
     slip_vals = np.array(DERIVATIVE_SLIPS)
-    t44p, t44c = dv.thesis_table_4_4(slip_vals, k), dv.thesis_table_4_4(slip_vals, k, as_printed=False)
-    t46p, t46c = dv.thesis_table_4_6(slip_vals, k), dv.thesis_table_4_6(slip_vals, k, as_printed=False)
+    t44p, t44c = (
+        dv.thesis_table_4_4(slip_vals, k),
+        dv.thesis_table_4_4(slip_vals, k, as_printed=False),
+    )
+    t46p, t46c = (
+        dv.thesis_table_4_6(slip_vals, k),
+        dv.thesis_table_4_6(slip_vals, k, as_printed=False),
+    )
     a0c = dv.shear_derivatives(0.0, slip_vals, k, "classic")
     a0s = dv.shear_derivatives(0.0, slip_vals, k, "simplified")
     bvals = [
         ("Table 4.4", "y1 at σ̄ = 0: T0 u_k (Q1 + Q2)|θ0", a0c.y1, t44p["y1"][0], ""),
-        ("Table 4.4", "y2 at σ̄ = 0: −T0² u_k² (Q1 + Q2)²|θ0 (as printed)", a0c.y2,
-         t44p["y2"][0], "leading term only"),
-        ("Table 4.4", "y2 at σ̄ = 0: exact (with T0 T_Δ and 2/sin²θ terms)", a0c.y2,
-         t44c["y2"][0], ""),
+        (
+            "Table 4.4",
+            "y2 at σ̄ = 0: −T0² u_k² (Q1 + Q2)²|θ0 (as printed)",
+            a0c.y2,
+            t44p["y2"][0],
+            "leading term only",
+        ),
+        (
+            "Table 4.4",
+            "y2 at σ̄ = 0: exact (with T0 T_Δ and 2/sin²θ terms)",
+            a0c.y2,
+            t44c["y2"][0],
+            "",
+        ),
         ("Table 4.6", "y1 at σ̄ = 0: τ1 (i + τ2)", a0s.y1, t46p["y1"][0], ""),
-        ("Table 4.6", "y2 at σ̄ = 0: U1² + 2 U1 tan φ (as printed)", a0s.y2, t46p["y2"][0],
-         "WRONG (sign of U1²)"),
+        (
+            "Table 4.6",
+            "y2 at σ̄ = 0: U1² + 2 U1 tan φ (as printed)",
+            a0s.y2,
+            t46p["y2"][0],
+            "WRONG (sign of U1²)",
+        ),
         ("Table 4.6", "y2 at σ̄ = 0: −U1² + 2 U1 tan φ (corrected)", a0s.y2, t46c["y2"][0], ""),
     ]
     for table, expr, auto, value, bad in bvals:
         r = rel(auto, value)
-        rows.append([table, expr, "boundary", "y1" if "y1" in expr else "y2", r,
-                     "exact" if r < 1e-8 else (bad or "differs")])
+        rows.append(
+            [
+                table,
+                expr,
+                "boundary",
+                "y1" if "y1" in expr else "y2",
+                r,
+                "exact" if r < 1e-8 else (bad or "differs"),
+            ]
+        )
     near = g["s_max"] * (1 - 1e-10)
     a_max = dv.shear_derivatives(near, slip_vals, k, "classic")
     dz_auto = float(jax.grad(lambda s: jnp.exp(-k.c_over_p_w * s))(1.0))
@@ -1348,8 +1777,7 @@ def _derivative_tables(ctx) -> tuple[str, list, list]:
         "difference over the grid of Figs 4.2–4.5 (σ̄ < 0.95 σ̄_n0 for the classic model; "
         "boundary values at i = " + ", ".join(f"{s:g}" for s in slip_vals) + "):",
         "",
-        _md_table(["table", "expression", "model", "quantity", "max rel. diff", "verdict"],
-                  rows),
+        _md_table(["table", "expression", "model", "quantity", "max rel. diff", "verdict"], rows),
         "",
         "**Findings.**",
         "",
@@ -1422,8 +1850,10 @@ def reproduce(
     import jax
 
     if not jax.config.jax_enable_x64:
-        warnings.warn("snowjax.reproduce runs in float32; enable jax_enable_x64 for the "
-                      "thesis comparisons", stacklevel=2)
+        warnings.warn(
+            "snowjax.reproduce runs in float32; enable jax_enable_x64 for the thesis comparisons",
+            stacklevel=2,
+        )
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     ctx = _Context(out=out, small=small)
@@ -1436,8 +1866,12 @@ def reproduce(
 
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    columns = (TextColumn("[progress.description]{task.description}"), BarColumn(),
-               TextColumn("{task.completed}/{task.total}"), TimeElapsedColumn())
+    columns = (
+        TextColumn("[progress.description]{task.description}"),
+        BarColumn(),
+        TextColumn("{task.completed}/{task.total}"),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns, disable=not progress) as bar:
         task = bar.add_task("Reproducing the thesis", total=len(specs) + 1)
         for spec in specs:
@@ -1447,9 +1881,11 @@ def reproduce(
                 res = spec.draw(ctx)
             except Exception as exc:  # reported in report.md, run continues
                 failures.append((spec.number, f"{type(exc).__name__}: {exc}"))
-                sections.append(f'<a id="{spec.stem}"></a>\n\n'
-                                f"## Fig. {spec.number} — {spec.title}\n\n**Not produced:** "
-                                f"`{type(exc).__name__}: {exc}`\n")
+                sections.append(
+                    f'<a id="{spec.stem}"></a>\n\n'
+                    f"## Fig. {spec.number} — {spec.title}\n\n**Not produced:** "
+                    f"`{type(exc).__name__}: {exc}`\n"
+                )
                 overview.append([spec.number, spec.title, "FAILED"])
                 bar.advance(task)
                 continue
@@ -1460,29 +1896,34 @@ def reproduce(
             written += [png, csv_path]
             tcols = res.table_columns or res.columns
             trows = res.table_rows if res.table_rows is not None else _thin(res.rows)
-            sections.append("\n".join([
-                f'<a id="{spec.stem}"></a>',
-                "",
-                f"## Fig. {spec.number} — {spec.title}",
-                "",
-                f"![Fig. {spec.number}]({png.name})",
-                "",
-                f"*Caption.* {spec.caption}",
-                "",
-                "*Equations:* " + ", ".join(
-                    e if e.startswith("Table") else f"({e})" for e in spec.equations),
-                "",
-                f"*Numbers behind the figure* (full data: [`{csv_path.name}`]({csv_path.name})):",
-                "",
-                _md_table(tcols, trows),
-                "",
-                f"**Comparison with the thesis.** {res.comparison}",
-                "",
-                f"<sub>computed in {time.perf_counter() - t0:.1f} s</sub>",
-                "",
-            ]))
-            overview.append([spec.number, spec.title,
-                             res.verdict or _summary_line(res.comparison)])
+            sections.append(
+                "\n".join(
+                    [
+                        f'<a id="{spec.stem}"></a>',
+                        "",
+                        f"## Fig. {spec.number} — {spec.title}",
+                        "",
+                        f"![Fig. {spec.number}]({png.name})",
+                        "",
+                        f"*Caption.* {spec.caption}",
+                        "",
+                        "*Equations:* "
+                        + ", ".join(
+                            e if e.startswith("Table") else f"({e})" for e in spec.equations
+                        ),
+                        "",
+                        f"*Numbers behind the figure* (full data: [`{csv_path.name}`]({csv_path.name})):",
+                        "",
+                        _md_table(tcols, trows),
+                        "",
+                        f"**Comparison with the thesis.** {res.comparison}",
+                        "",
+                        f"<sub>computed in {time.perf_counter() - t0:.1f} s</sub>",
+                        "",
+                    ]
+                )
+            )
+            overview.append([spec.number, spec.title, res.verdict or _summary_line(res.comparison)])
             bar.advance(task)
         bar.update(task, description="Derivative tables 4.3–4.6")
         try:
@@ -1515,8 +1956,9 @@ def reproduce(
         "| figure | content | how it compares with the thesis (details below) |",
         "|---|---|---|",
     ]
-    header += [f"| [{n}](#fig_{n.replace('.', '_')}) | {_cell(t)} | {_cell(c)} |"
-               for n, t, c in overview]
+    header += [
+        f"| [{n}](#fig_{n.replace('.', '_')}) | {_cell(t)} | {_cell(c)} |" for n, t, c in overview
+    ]
     header += [
         "",
         "**Common assumptions.** Tyre D = 0.736 m (thesis), b = 0.235 m (assumed, P235/75R15); "

@@ -47,8 +47,10 @@ def terrain_figure(ctx, figure_result, subplots, status_names):
             ax_z.plot(slips, z, style, color=color, label=label)
             ax_dp.plot(slips, dp, style, color=color, label=label)
             summary[(name, dname)] = (z, dp)
-            rows += [[name, dname, float(i), float(a), float(b), int(s)]
-                     for i, a, b, s in zip(slips, z, dp, np.asarray(st.status))]
+            rows += [
+                [name, dname, float(i), float(a), float(b), int(s)]
+                for i, a, b, s in zip(slips, z, dp, np.asarray(st.status))
+            ]
     ax_z.set(xlabel="slip i [-]", ylabel="sinkage z0 [cm]")
     ax_dp.set(xlabel="slip i [-]", ylabel="drawbar pull [N]")
     ax_dp.axhline(0, color="k", lw=0.6)
@@ -63,8 +65,10 @@ def terrain_figure(ctx, figure_result, subplots, status_names):
         lower += int(np.sum(summary[(name, "Wong–Reece")][1] < summary[(name, "front region")][1]))
         zf, dpf = summary[(name, "front region")]
         zw, dpw = summary[(name, "Wong–Reece")]
-        parts.append(f"{name}: sinkage {zf[k0]:.1f} cm (front) vs {zw[k0]:.1f} cm (Wong–Reece), "
-                     f"drawbar pull {dpf[k0]:.0f} N vs {dpw[k0]:.0f} N")
+        parts.append(
+            f"{name}: sinkage {zf[k0]:.1f} cm (front) vs {zw[k0]:.1f} cm (Wong–Reece), "
+            f"drawbar pull {dpf[k0]:.0f} N vs {dpw[k0]:.0f} N"
+        )
     comparison = (
         f"Not in the thesis. At slip {slips[k0]:.2f}: " + "; ".join(parts) + ". The "
         "Wong–Reece distribution moves the stress peak forward of the axle and unloads the "
@@ -73,9 +77,15 @@ def terrain_figure(ctx, figure_result, subplots, status_names):
         f"lower with Wong–Reece at {lower} of the {3 * len(slips)} (terrain, slip) points. Bekker's Snow (U.S.) is much softer under this narrow tyre than the "
         "thesis's snow. On the layered snow the ice carries the wheel until it breaks under "
         "the rim; the equilibrium is the shallowest one. Statuses: "
-        + ", ".join(sorted(status_names(statuses))) + "."
+        + ", ".join(sorted(status_names(statuses)))
+        + "."
     )
     cols = ["terrain", "distribution", "slip", "sinkage_cm", "drawbar_pull_N", "status"]
-    return figure_result(fig, cols, rows, comparison,
-                         verdict=f"Wong–Reece: more sinkage; lower drawbar pull at {lower} of "
-                                 f"{3 * len(slips)} points")
+    return figure_result(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"Wong–Reece: more sinkage; lower drawbar pull at {lower} of "
+        f"{3 * len(slips)} points",
+    )

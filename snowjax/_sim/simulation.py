@@ -141,7 +141,9 @@ def wheel_kinematics(
     """
     dtype = jnp.result_type(speed, wheel_speed, radius, float)
     slip, _, factor = _kinematics(
-        jnp.asarray(speed, dtype), jnp.asarray(wheel_speed, dtype), jnp.asarray(radius, dtype),
+        jnp.asarray(speed, dtype),
+        jnp.asarray(wheel_speed, dtype),
+        jnp.asarray(radius, dtype),
         speed_eps,
     )
     return slip, factor
@@ -270,9 +272,7 @@ def wheel_forces(
     _check_shear(shear)
     _check_model(wheel, snow, distribution, shear)
     _check_concrete("speed", speed, lambda x: np.ones_like(x, bool), "a number [m/s]")
-    _check_concrete(
-        "wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]"
-    )
+    _check_concrete("wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]")
     _check_concrete("load", load, lambda x: x > 0, "> 0 N")
     if not (np.isfinite(speed_eps) and speed_eps > 0):
         raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
@@ -622,8 +622,11 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
 
 def _check_profile(profile, n):
     times, values = profile.times, profile.values
-    if times.ndim != 1 or values.shape[:1] != times.shape or values.ndim > 2 or (
-        values.ndim == 2 and values.shape[1] != n
+    if (
+        times.ndim != 1
+        or values.shape[:1] != times.shape
+        or values.ndim > 2
+        or (values.ndim == 2 and values.shape[1] != n)
     ):
         raise ValueError(
             "TorqueProfile: times must have shape (k,) and values (k,) or (k, num_wheels);"
@@ -790,9 +793,7 @@ def simulate_longitudinal(
         raise ValueError(f"vehicle.num_wheels must be a positive int; got {n!r}")
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, n)
-    dtype = jnp.result_type(
-        vehicle.mass, *jax.tree_util.tree_leaves((snow, distribution)), float
-    )
+    dtype = jnp.result_type(vehicle.mass, *jax.tree_util.tree_leaves((snow, distribution)), float)
     speed0 = jnp.asarray(initial_speed, dtype)
     if initial_wheel_speed is None:
         initial_wheel_speed = speed0 / (vehicle.wheel.diameter / 2)

@@ -97,14 +97,6 @@ _BLOCK = 1 << 20  # elements per block when validating or hashing list-mode inpu
 # ---------------------------------------------------------------------------------------
 
 
-
-
-
-
-
-
-
-
 # ---------------------------------------------------------------------------------------
 # The sweep definition: inputs -> rows of chunk k, hash, columns
 # ---------------------------------------------------------------------------------------
@@ -282,8 +274,9 @@ class _Definition:
                 )
         else:
             for name, x in self.inputs.items():
-                out[name] = np.asarray(x[a:b] if x.size > 1 else np.full(b - a, x.reshape(-1)[0]),
-                                       dtype=self.dtype)
+                out[name] = np.asarray(
+                    x[a:b] if x.size > 1 else np.full(b - a, x.reshape(-1)[0]), dtype=self.dtype
+                )
         return out
 
     def build(self, columns: dict[str, Any]):
@@ -294,7 +287,8 @@ class _Definition:
             parts[owner][path] = columns[name]
         terrain = _with_leaves(self.terrain, parts["terrain"])
         distribution = (
-            None if self.distribution is None
+            None
+            if self.distribution is None
             else _with_leaves(self.distribution, parts["distribution"])
         )
         return wheel, terrain, distribution
@@ -308,7 +302,9 @@ class _Definition:
             h.update(f"|{name}:{x.shape}|".encode())
             flat = x.reshape(-1)
             for a, b in _blocks(flat.size):
-                h.update(np.ascontiguousarray(flat[a:b], dtype=self.dtype.newbyteorder("<")).tobytes())
+                h.update(
+                    np.ascontiguousarray(flat[a:b], dtype=self.dtype.newbyteorder("<")).tobytes()
+                )
         return h.hexdigest()
 
     def summary(self, with_values: bool = True) -> dict[str, Any]:
@@ -344,7 +340,16 @@ class _Definition:
 
 
 def _define(
-    wheel, snow, loads, slips, *, grid, shear, chunk_size, nodes_per_panel, max_steps,
+    wheel,
+    snow,
+    loads,
+    slips,
+    *,
+    grid,
+    shear,
+    chunk_size,
+    nodes_per_panel,
+    max_steps,
     distribution=None,
 ):
     import jax.numpy as jnp
@@ -359,7 +364,11 @@ def _define(
         isinstance(nodes_per_panel, bool) or int(nodes_per_panel) < 2
     ):
         raise ValueError(f"sweep: nodes_per_panel must be >= 2, got {nodes_per_panel!r}")
-    if isinstance(chunk_size, bool) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+    if (
+        isinstance(chunk_size, bool)
+        or not isinstance(chunk_size, (int, np.integer))
+        or chunk_size < 1
+    ):
         raise ValueError(f"sweep: chunk_size must be a positive integer, got {chunk_size!r}")
     if isinstance(max_steps, bool) or int(max_steps) < 1:
         raise ValueError(f"sweep: max_steps must be a positive integer, got {max_steps!r}")
@@ -373,8 +382,9 @@ def _define(
     except ValueError as err:
         raise ValueError(f"sweep: {err}") from None
     names = _parameter_names(
-        terrain_t, dist_t, reserved=("index", "param_set", "load", "slip", *_WHEEL_FIELDS,
-                                     *_OUTPUT_FIELDS, "status"),
+        terrain_t,
+        dist_t,
+        reserved=("index", "param_set", "load", "slip", *_WHEEL_FIELDS, *_OUTPUT_FIELDS, "status"),
     )
     leaves = {f: wheel_leaves[f] for f in _WHEEL_FIELDS}
     for name, (owner, path) in names.items():
@@ -423,13 +433,16 @@ def _define(
             )
         shape = (next(iter(lengths.values()), 1),)
     # The terrain's and the distribution's own validity rules (those of solve_wheel).
-    _check_parameter_sets(
-        terrain_t, terrain_leaves, lambda t, _: t.constraints(shear), "", "snow"
-    )
+    _check_parameter_sets(terrain_t, terrain_leaves, lambda t, _: t.constraints(shear), "", "snow")
     if dist_t is not None:
         _check_parameter_sets(
-            dist_t, dist_leaves, lambda d, slip: d.constraints(slip), "", "distribution",
-            slips=inputs["slip"], grid=grid,
+            dist_t,
+            dist_leaves,
+            lambda d, slip: d.constraints(slip),
+            "",
+            "distribution",
+            slips=inputs["slip"],
+            grid=grid,
         )
     n_points = int(np.prod(shape))
     return _Definition(
@@ -548,10 +561,7 @@ class _Solver:
         rows = self.d.chunk_inputs(k)
         n = rows["index"].size
         pad = lambda x: np.pad(x, (0, self.padded - n), mode="edge")  # noqa: E731
-        x = {
-            f: jnp.asarray(self.place(pad(rows[f])))
-            for f in ("load", "slip", *self.d.parameters)
-        }
+        x = {f: jnp.asarray(self.place(pad(rows[f]))) for f in ("load", "slip", *self.d.parameters)}
         wheel, terrain, distribution = self.d.build(x)
         state = solve_wheel(
             wheel,
@@ -664,7 +674,9 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
                 for key in new
                 if key != "columns" and old.get(key) != new[key]
             ]
-            why = "; ".join(diff) if diff else "the input values (loads, slips or parameters) differ"
+            why = (
+                "; ".join(diff) if diff else "the input values (loads, slips or parameters) differ"
+            )
             raise ValueError(
                 f"sweep: {out} holds a different sweep ({why}). Use another directory, or"
                 " resume=False (`--restart` on the command line) to discard it."
@@ -763,8 +775,16 @@ def sweep(
         if fmt not in _FORMATS:
             raise ValueError(f"sweep: formats must be among {_FORMATS}, got {fmt!r}")
     d = _define(
-        wheel, snow, loads, slips, grid=grid, shear=shear, chunk_size=chunk_size,
-        nodes_per_panel=nodes_per_panel, max_steps=max_steps, distribution=distribution,
+        wheel,
+        snow,
+        loads,
+        slips,
+        grid=grid,
+        shear=shear,
+        chunk_size=chunk_size,
+        nodes_per_panel=nodes_per_panel,
+        max_steps=max_steps,
+        distribution=distribution,
     )
     p_count = jax.process_count() if process_count is None else int(process_count)
     p_index = jax.process_index() if process_index is None else int(process_index)
@@ -785,7 +805,7 @@ def sweep(
     mine = [k for k in range(d.n_chunks) if _owner(k, p_count) == p_index]
     for p in out.glob(".chunk_*.npz.tmp.*"):
         try:
-            k = int(p.name[len(".chunk_"):].split(".")[0])
+            k = int(p.name[len(".chunk_") :].split(".")[0])
         except ValueError:
             continue
         if _owner(k, p_count) == p_index:

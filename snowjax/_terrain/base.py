@@ -18,11 +18,13 @@ def _clip_negative(x) -> Array:
     x = jnp.asarray(x)
     return jnp.where(x >= 0, x, 0.0)
 
+
 def _safe_power(x: Array, n: Array) -> Array:
     """`x**n` for x >= 0 whose value *and gradient* are finite at x = 0."""
     positive = x > 0
     safe_x = jnp.where(positive, x, 1.0)
     return jnp.where(positive, safe_x**n, 0.0)
+
 
 class Terrain(eqx.Module):
     """A terrain the rigid wheel can run on: a pressure–sinkage law plus shear strength.

@@ -1,5 +1,4 @@
-"""Bekker's pressure–sinkage law (eq. 2.1) and `BekkerSoil` with its published presets.
-"""
+"""Bekker's pressure–sinkage law (eq. 2.1) and `BekkerSoil` with its published presets."""
 
 from __future__ import annotations
 
@@ -38,6 +37,7 @@ def bekker_pressure(
     """
     z = _clip_negative(sinkage)
     return (jnp.asarray(k_c) / jnp.asarray(width) + k_phi) * _safe_power(z, jnp.asarray(n))
+
 
 class BekkerSoil(Terrain):
     """A terrain described by Bekker's pressure–sinkage law (2.1) and Mohr–Coulomb (2.5).

@@ -1,5 +1,4 @@
-"""Layered snow: two Wong snow layers separated by an ice layer that fails, on a hard base.
-"""
+"""Layered snow: two Wong snow layers separated by an ice layer that fails, on a hard base."""
 
 from __future__ import annotations
 
@@ -96,8 +95,12 @@ class LayeredSnow(Terrain):
             ("bottom.z_w", self.bottom.z_w, self.bottom.z_w > self.top.z_w, "> top.z_w (m)")
         )
         rules.append(
-            ("ice_failure_pressure", self.ice_failure_pressure, self.ice_failure_pressure > 0,
-             "> 0 Pa")
+            (
+                "ice_failure_pressure",
+                self.ice_failure_pressure,
+                self.ice_failure_pressure > 0,
+                "> 0 Pa",
+            )
         )
         return rules
 

@@ -1,5 +1,4 @@
-"""Reece's pressure–sinkage law (eq. 2.4) and `ReeceSoil`.
-"""
+"""Reece's pressure–sinkage law (eq. 2.4) and `ReeceSoil`."""
 
 from __future__ import annotations
 
@@ -43,6 +42,7 @@ def reece_pressure(
     modulus = jnp.asarray(cohesion) * k_c_prime + jnp.asarray(unit_weight) * b * k_phi_prime
     return modulus * _safe_power(z / b, jnp.asarray(n))
 
+
 class ReeceSoil(Terrain):
     """A terrain described by Reece's pressure–sinkage law (2.4) and Mohr–Coulomb (2.5).
 
@@ -72,8 +72,13 @@ class ReeceSoil(Terrain):
     def pressure(self, sinkage, width):
         """Reece's law (2.4), `sigma = (c k'_c + gamma_s b k'_phi)(z / b)^n` [Pa]."""
         return reece_pressure(
-            sinkage, width, self.cohesion, self.unit_weight, self.k_c_prime,
-            self.k_phi_prime, self.n,
+            sinkage,
+            width,
+            self.cohesion,
+            self.unit_weight,
+            self.k_c_prime,
+            self.k_phi_prime,
+            self.n,
         )
 
     def constraints(self, shear: str = "classic"):
@@ -92,5 +97,6 @@ class ReeceSoil(Terrain):
     @classmethod
     def reference(cls) -> "ReeceSoil":
         # Any valid set (stands in for invalid batch elements); not a published soil.
-        return cls(n=1.0, k_c_prime=1.0, k_phi_prime=1000.0, unit_weight=15e3,
-                   cohesion=1e3, tan_phi=0.5)
+        return cls(
+            n=1.0, k_c_prime=1.0, k_phi_prime=1000.0, unit_weight=15e3, cohesion=1e3, tan_phi=0.5
+        )

@@ -27,6 +27,7 @@ def mohr_coulomb(
     """
     return jnp.asarray(cohesion) + jnp.asarray(normal_stress) * jnp.asarray(tan_phi)
 
+
 def _signed_mobilisation(x: Array) -> Array:
     """`sign(x) (1 - exp(-|x|))`, written so that value and gradient are finite for all x.
 
@@ -39,6 +40,7 @@ def _signed_mobilisation(x: Array) -> Array:
     # |x| written with `where` so that its derivative is +-1 (never 0) at x = 0.
     magnitude = -jnp.expm1(-jnp.where(positive, x, -x))
     return jnp.where(positive, magnitude, -magnitude)
+
 
 def janosi_hanamoto(
     shear_displacement: Float[ArrayLike, "..."],
@@ -67,6 +69,7 @@ def janosi_hanamoto(
     return strength * _signed_mobilisation(
         jnp.asarray(shear_displacement) / jnp.asarray(shear_modulus)
     )
+
 
 def gawwad_crolla_shear(
     shear_displacement: Float[ArrayLike, "..."],
@@ -97,6 +100,7 @@ def gawwad_crolla_shear(
         tan_phi,
         shear_modulus,
     )
+
 
 def gawwad_crolla_unloading_pressure(
     sinkage: Float[ArrayLike, "..."],

@@ -1,5 +1,4 @@
-"""Wong's pressure–sinkage law for shallow snow on a hard base (eq. 2.3 / 4.1) and `WongSnow`.
-"""
+"""Wong's pressure–sinkage law for shallow snow on a hard base (eq. 2.3 / 4.1) and `WongSnow`."""
 
 from __future__ import annotations
 
@@ -36,6 +35,7 @@ def wong_sinkage(
     """
     return -jnp.asarray(z_w) * jnp.expm1(-jnp.asarray(pressure) / jnp.asarray(p_w))
 
+
 def wong_pressure(
     sinkage: Float[ArrayLike, "..."],
     p_w: Float[ArrayLike, "..."],
@@ -58,6 +58,7 @@ def wong_pressure(
     below = ratio < 1.0
     safe = jnp.where(below, ratio, 0.0)
     return jnp.where(below, -jnp.asarray(p_w) * jnp.log1p(-safe), jnp.inf)
+
 
 class WongSnow(Terrain):
     """Shallow snow described by Wong's pressure–sinkage law and Mohr–Coulomb shear.
@@ -94,8 +95,12 @@ class WongSnow(Terrain):
 
     def constraints(self, shear: str = "classic"):
         if shear == "simplified":  # the simplified model is normalised by c
-            cohesion = ("cohesion", self.cohesion, self.cohesion > 0,
-                        "> 0 Pa (the simplified model is normalised by c)")
+            cohesion = (
+                "cohesion",
+                self.cohesion,
+                self.cohesion > 0,
+                "> 0 Pa (the simplified model is normalised by c)",
+            )
         else:
             cohesion = ("cohesion", self.cohesion, self.cohesion >= 0, ">= 0 Pa")
         return [
@@ -142,7 +147,6 @@ class WongSnow(Terrain):
             tan_phi=0.0787,
             shear_modulus=diameter / 73.6,
         )
-
 
     @classmethod
     def thesis_plate_rule_snow(cls, diameter: float = THESIS_DIAMETER) -> "WongSnow":

@@ -320,9 +320,7 @@ def normalized_longitudinal_slip(
 
     **Returns:** φ_x [-] (±inf for zero friction limit μ_x F_z = 0, 0 if also i = 0).
     """
-    return _safe_ratio(
-        jnp.asarray(c_s) * jnp.asarray(slip), jnp.asarray(mu_x) * jnp.asarray(load)
-    )
+    return _safe_ratio(jnp.asarray(c_s) * jnp.asarray(slip), jnp.asarray(mu_x) * jnp.asarray(load))
 
 
 def normalized_lateral_slip(
@@ -928,8 +926,9 @@ def _sensitivities_jit(load, slip, slip_angle, coefficients):
         # Total load derivative by the chain rule through (3.17)-(3.21).
         dp_dload = jax.jacfwd(lambda f: tire_parameters(f, coeffs))(fz)
         d_load = jax.tree_util.tree_map(
-            lambda direct, dp: direct
-            + sum(getattr(dp, n) * getattr(dp_dload, n) for n in _PARAMETER_NAMES),
+            lambda direct, dp: (
+                direct + sum(getattr(dp, n) * getattr(dp_dload, n) for n in _PARAMETER_NAMES)
+            ),
             d_load_direct,
             d_params,
             is_leaf=lambda x: isinstance(x, TireParameters),

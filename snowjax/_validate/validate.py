@@ -53,8 +53,11 @@ IN_TO_M = 0.0254
 
 def _read_csv(name: str) -> dict[str, np.ndarray]:
     path = importlib.resources.files("snowjax") / "data" / name
-    lines = [ln.strip() for ln in path.read_text(encoding="utf-8").splitlines()
-             if ln.strip() and not ln.lstrip().startswith("#")]
+    lines = [
+        ln.strip()
+        for ln in path.read_text(encoding="utf-8").splitlines()
+        if ln.strip() and not ln.lstrip().startswith("#")
+    ]
     header = [h.strip() for h in lines[0].split(",")]
     values = np.array([[float(x) for x in ln.split(",")] for ln in lines[1:]])
     return {h: values[:, k] for k, h in enumerate(header)}
@@ -112,8 +115,13 @@ def _wong_terrain(rows, grid, diameter):
     from .._terrain.wong import WongSnow
 
     p_w = np.asarray(grid)[None, :]
-    return WongSnow(p_w=p_w, z_w=rows["snow_depth_m"][:, None], cohesion=0.2165 * p_w,
-                    tan_phi=0.0787, shear_modulus=diameter / 73.6)
+    return WongSnow(
+        p_w=p_w,
+        z_w=rows["snow_depth_m"][:, None],
+        cohesion=0.2165 * p_w,
+        tan_phi=0.0787,
+        shear_modulus=diameter / 73.6,
+    )
 
 
 def _bekker_terrain(rows, grid, diameter):
@@ -121,8 +129,14 @@ def _bekker_terrain(rows, grid, diameter):
 
     lab = BekkerSoil.thesis_lab_snow()
     s = np.asarray(grid)[None, :]
-    return BekkerSoil(n=lab.n, k_c=lab.k_c * s, k_phi=lab.k_phi * s, cohesion=lab.cohesion,
-                      tan_phi=lab.tan_phi, shear_modulus=lab.shear_modulus)
+    return BekkerSoil(
+        n=lab.n,
+        k_c=lab.k_c * s,
+        k_phi=lab.k_phi * s,
+        cohesion=lab.cohesion,
+        tan_phi=lab.tan_phi,
+        shear_modulus=lab.shear_modulus,
+    )
 
 
 def wheel_validation_model(
@@ -157,14 +171,20 @@ def wheel_validation_model(
         shape = (len(rows["row"]), len(grid))
         z = np.broadcast_to(np.where(usable, np.asarray(st.sinkage), np.nan), shape)
         mu = np.broadcast_to(
-            np.where(usable, np.asarray(st.motion_resistance) / wheel_load, np.nan), shape)
+            np.where(usable, np.asarray(st.motion_resistance) / wheel_load, np.nan), shape
+        )
         return z, mu
 
     return ValidationModel(
-        key=key, label=label,
+        key=key,
+        label=label,
         equations="rigid wheel, sinkage-vs-load equilibrium (4.14), resistance (4.16)",
-        evaluate=evaluate, grid=np.asarray(grid), fit_target="sinkage",
-        parameter=parameter, note=note)
+        evaluate=evaluate,
+        grid=np.asarray(grid),
+        fit_target="sinkage",
+        parameter=parameter,
+        note=note,
+    )
 
 
 def validation_models(
@@ -191,14 +211,25 @@ def validation_models(
         return None, None
 
     def crrel_fixed(rows, grid):
-        out = crrel_wheel(rows["snow_depth_m"], rows["density_kg_m3"], rows["radius_m"], b,
-                          w_n, final_density=CIV_FINAL_DENSITY)
-        return (np.asarray(out.sinkage)[:, None],
-                np.asarray(out.resistance_coefficient)[:, None])
+        out = crrel_wheel(
+            rows["snow_depth_m"],
+            rows["density_kg_m3"],
+            rows["radius_m"],
+            b,
+            w_n,
+            final_density=CIV_FINAL_DENSITY,
+        )
+        return (np.asarray(out.sinkage)[:, None], np.asarray(out.resistance_coefficient)[:, None])
 
     def crrel_fitted(rows, grid):
-        out = crrel_wheel(rows["snow_depth_m"][:, None], rows["density_kg_m3"][:, None],
-                          rows["radius_m"][:, None], b, w_n, final_density=grid[None, :])
+        out = crrel_wheel(
+            rows["snow_depth_m"][:, None],
+            rows["density_kg_m3"][:, None],
+            rows["radius_m"][:, None],
+            b,
+            w_n,
+            final_density=grid[None, :],
+        )
         return np.asarray(out.sinkage), np.asarray(out.resistance_coefficient)
 
     def richmond_measured(rows, grid):
@@ -221,41 +252,77 @@ def validation_models(
         return None, np.asarray(d_c) / w_n
 
     return [
-        ValidationModel("baseline", "baseline: mean of the training rows", "-", baseline,
-                        note="predicts every held-out row by the mean of the others"),
         ValidationModel(
-            "crrel", "CRREL shallow snow (rho_f = 500 kg/m^3)",
+            "baseline",
+            "baseline: mean of the training rows",
+            "-",
+            baseline,
+            note="predicts every held-out row by the mean of the others",
+        ),
+        ValidationModel(
+            "crrel",
+            "CRREL shallow snow (rho_f = 500 kg/m^3)",
             "CRREL 95-7 eq. 1 (z = h(1 - rho0/rho_f)) + eq. 4 (= thesis 2.23) on the "
-            "arc a = r arccos(1 - z/r)", crrel_fixed,
-            note="no calibration: rho_f = 500 kg/m^3 is CRREL 95-7's value for the CIV"),
+            "arc a = r arccos(1 - z/r)",
+            crrel_fixed,
+            note="no calibration: rho_f = 500 kg/m^3 is CRREL 95-7's value for the CIV",
+        ),
         ValidationModel(
-            "crrel_fit", "CRREL shallow snow, rho_f fitted", "as above", crrel_fitted,
-            grid=np.linspace(300.0, 917.0, 618), fit_target="sinkage",
-            parameter="rho_f [kg/m^3]"),
+            "crrel_fit",
+            "CRREL shallow snow, rho_f fitted",
+            "as above",
+            crrel_fitted,
+            grid=np.linspace(300.0, 917.0, 618),
+            fit_target="sinkage",
+            parameter="rho_f [kg/m^3]",
+        ),
         ValidationModel(
-            "richmond_measured_rut", "Richmond (2.23) on the measured rut",
+            "richmond_measured_rut",
+            "Richmond (2.23) on the measured rut",
             "R = 21.313 (rho0 w a)^1.1918, a = r arccos(1 - z_measured/r)",
             richmond_measured,
-            note="uses the measured sinkage as input: tests the resistance law alone"),
+            note="uses the measured sinkage as input: tests the resistance law alone",
+        ),
         wheel_validation_model(
-            "wheel_wong", "chapter-4 wheel, Wong snow (z_w = h)", _wong_terrain,
-            np.geomspace(2e3, 400e3, 81), "p_w [Pa]", wheel_load=w_n, tyre_width=b,
-            note="Table 4.1 ratios c/p_w = 0.2165, tan phi = 0.0787, K = D/73.6; p_w fitted"),
+            "wheel_wong",
+            "chapter-4 wheel, Wong snow (z_w = h)",
+            _wong_terrain,
+            np.geomspace(2e3, 400e3, 81),
+            "p_w [Pa]",
+            wheel_load=w_n,
+            tyre_width=b,
+            note="Table 4.1 ratios c/p_w = 0.2165, tan phi = 0.0787, K = D/73.6; p_w fitted",
+        ),
         wheel_validation_model(
-            "wheel_bekker", "chapter-4 wheel, Bekker snow (unlimited depth)",
-            _bekker_terrain, np.geomspace(0.1, 100.0, 61), "scale of (k_c, k_phi)",
-            wheel_load=w_n, tyre_width=b,
-            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor"),
+            "wheel_bekker",
+            "chapter-4 wheel, Bekker snow (unlimited depth)",
+            _bekker_terrain,
+            np.geomspace(0.1, 100.0, 61),
+            "scale of (k_c, k_phi)",
+            wheel_load=w_n,
+            tyre_width=b,
+            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor",
+        ),
         ValidationModel(
-            "bekker", "Bekker closed form (2.24/2.25)", "z0 and R_c of (2.25)",
-            bekker_closed, grid=np.geomspace(0.1, 100.0, 121), fit_target="sinkage",
+            "bekker",
+            "Bekker closed form (2.24/2.25)",
+            "z0 and R_c of (2.25)",
+            bekker_closed,
+            grid=np.geomspace(0.1, 100.0, 121),
+            fit_target="sinkage",
             parameter="scale of (k_c, k_phi)",
-            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor"),
+            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor",
+        ),
         ValidationModel(
-            "van_es", "Van Es (2.26), D_c only", "D_c with rho_f = 500 kg/m^3, lambda = 1",
-            van_es, grid=np.geomspace(1e4, 1e8, 161), fit_target="coefficient",
+            "van_es",
+            "Van Es (2.26), D_c only",
+            "D_c with rho_f = 500 kg/m^3, lambda = 1",
+            van_es,
+            grid=np.geomspace(1e4, 1e8, 161),
+            fit_target="coefficient",
             parameter="sigma_i [Pa]",
-            note="sigma_i fitted to the resistance coefficient; D_r = D_d = 0"),
+            note="sigma_i fitted to the resistance coefficient; D_r = D_d = 0",
+        ),
     ]
 
 
@@ -317,17 +384,20 @@ def _crrel_examples_check() -> dict[str, np.ndarray]:
     rho_f = np.asarray(crrel_final_density(pressure))
     undisturbed = ex["snow_type"] == 7
     rho0 = np.where(undisturbed, ex["density_kg_m3"], 200.0)
-    rut = np.where(undisturbed,
-                   np.asarray(crrel_sinkage(ex["snow_depth_m"], rho0, rho_f)), 0.0)
-    level_resistance = np.where(ex["slope_rad"] > 0,
-                                ex["resistance_n"] - weight * np.sin(ex["slope_rad"]),
-                                ex["resistance_n"])
-    pull, coeff = crrel_drawbar(ex["gross_traction_n"], level_resistance, weight,
-                                ex["slope_rad"])
+    rut = np.where(undisturbed, np.asarray(crrel_sinkage(ex["snow_depth_m"], rho0, rho_f)), 0.0)
+    level_resistance = np.where(
+        ex["slope_rad"] > 0,
+        ex["resistance_n"] - weight * np.sin(ex["slope_rad"]),
+        ex["resistance_n"],
+    )
+    pull, coeff = crrel_drawbar(ex["gross_traction_n"], level_resistance, weight, ex["slope_rad"])
     return {
-        "example": ex["example"], "snow_depth_m": ex["snow_depth_m"],
-        "snow_type": ex["snow_type"], "rut_depth_report_m": ex["rut_depth_m"],
-        "rut_depth_snowjax_m": rut, "drawbar_report_n": ex["drawbar_n"],
+        "example": ex["example"],
+        "snow_depth_m": ex["snow_depth_m"],
+        "snow_type": ex["snow_type"],
+        "rut_depth_report_m": ex["rut_depth_m"],
+        "rut_depth_snowjax_m": rut,
+        "drawbar_report_n": ex["drawbar_n"],
         "drawbar_snowjax_n": np.asarray(pull),
         "drawbar_coefficient_report": ex["drawbar_coefficient"],
         "drawbar_coefficient_snowjax": np.asarray(coeff),
@@ -363,12 +433,18 @@ def validate(
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
     rows = shoop_2001_table11(include_uncertain)
-    models = validation_models(wheel_load=wheel_load, tyre_width=tyre_width) \
-        if models is None else models
+    models = (
+        validation_models(wheel_load=wheel_load, tyre_width=tyre_width)
+        if models is None
+        else models
+    )
     measured = {"sinkage": rows["sinkage_m"], "coefficient": rows["resistance_coefficient"]}
     predictions, metrics, skipped = {}, [], {}
-    columns = (TextColumn("[progress.description]{task.description}"), BarColumn(),
-               TimeElapsedColumn())
+    columns = (
+        TextColumn("[progress.description]{task.description}"),
+        BarColumn(),
+        TimeElapsedColumn(),
+    )
     with Progress(*columns, disable=not progress) as bar:
         task = bar.add_task("validate", total=len(models) + 1)
         for model in models:
@@ -401,27 +477,42 @@ def validate(
                     continue
                 err = p - measured[q]
                 finite = np.isfinite(err)
-                params = (None if chosen is None else model.grid[chosen])
-                metrics.append({
-                    "model": model.key, "label": model.label, "quantity": q,
-                    "n": int(finite.sum()), "n_rows": len(err),
-                    "rms": float(np.sqrt(np.mean(err[finite] ** 2))) if finite.any()
-                    else math.nan,
-                    "worst": float(np.max(np.abs(err[finite]))) if finite.any() else math.nan,
-                    "bias": float(np.mean(err[finite])) if finite.any() else math.nan,
-                    "parameter": model.parameter,
-                    "chosen_median": None if params is None else float(np.median(params)),
-                    "chosen_min": None if params is None else float(np.min(params)),
-                    "chosen_max": None if params is None else float(np.max(params)),
-                    "at_grid_edge": bool(params is not None and (
-                        np.any(chosen == 0) or np.any(chosen == len(model.grid) - 1))),
-                })
+                params = None if chosen is None else model.grid[chosen]
+                metrics.append(
+                    {
+                        "model": model.key,
+                        "label": model.label,
+                        "quantity": q,
+                        "n": int(finite.sum()),
+                        "n_rows": len(err),
+                        "rms": float(np.sqrt(np.mean(err[finite] ** 2)))
+                        if finite.any()
+                        else math.nan,
+                        "worst": float(np.max(np.abs(err[finite]))) if finite.any() else math.nan,
+                        "bias": float(np.mean(err[finite])) if finite.any() else math.nan,
+                        "parameter": model.parameter,
+                        "chosen_median": None if params is None else float(np.median(params)),
+                        "chosen_min": None if params is None else float(np.min(params)),
+                        "chosen_max": None if params is None else float(np.max(params)),
+                        "at_grid_edge": bool(
+                            params is not None
+                            and (np.any(chosen == 0) or np.any(chosen == len(model.grid) - 1))
+                        ),
+                    }
+                )
             bar.advance(task)
         bar.update(task, description="validate: CRREL 95-1 examples")
         examples = _crrel_examples_check()
         bar.advance(task)
-    result = ValidationResult(predictions=predictions, metrics=metrics, examples=examples,
-                              data=rows, files=[], skipped=skipped, models=models)
+    result = ValidationResult(
+        predictions=predictions,
+        metrics=metrics,
+        examples=examples,
+        data=rows,
+        files=[],
+        skipped=skipped,
+        models=models,
+    )
     if out_dir is not None:
         result.files = _write(pathlib.Path(out_dir), result, wheel_load, tyre_width)
     return result
@@ -443,8 +534,9 @@ def _write_csv(path: pathlib.Path, columns: dict[str, np.ndarray]) -> pathlib.Pa
     n = len(next(iter(columns.values())))
     lines = [",".join(keys)]
     for i in range(n):
-        lines.append(",".join(_fmt(float(columns[k][i]), 8) if columns[k] is not None
-                              else "" for k in keys))
+        lines.append(
+            ",".join(_fmt(float(columns[k][i]), 8) if columns[k] is not None else "" for k in keys)
+        )
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
     return path
 
@@ -483,12 +575,16 @@ def _figure(result: ValidationResult, path: pathlib.Path) -> pathlib.Path:
 def metrics_table_markdown(metrics: list, models: list) -> str:
     """The RMS / worst-error table of [`snowjax.validate`][] as Markdown."""
     labels = {m.key: m.label for m in models}
-    calib = {m.key: (f"{m.parameter} (LOO on {m.fit_target})" if m.grid is not None
-                     else "none") for m in models}
+    calib = {
+        m.key: (f"{m.parameter} (LOO on {m.fit_target})" if m.grid is not None else "none")
+        for m in models
+    }
     by = {(r["model"], r["quantity"]): r for r in metrics}
-    lines = ["| model | calibrated | sinkage RMS [m] | sinkage worst [m] | "
-             "R/W RMS [-] | R/W worst [-] | R/W bias [-] |",
-             "|---|---|---|---|---|---|---|"]
+    lines = [
+        "| model | calibrated | sinkage RMS [m] | sinkage worst [m] | "
+        "R/W RMS [-] | R/W worst [-] | R/W bias [-] |",
+        "|---|---|---|---|---|---|---|",
+    ]
     for key in dict.fromkeys(r["model"] for r in metrics):
         s, c = by.get((key, "sinkage")), by.get((key, "coefficient"))
         cal = calib.get(key, "")
@@ -503,7 +599,8 @@ def metrics_table_markdown(metrics: list, models: list) -> str:
         lines.append(
             f"| {labels.get(key, key)} | {cal} | {_fmt(s and s['rms'], 3)} | "
             f"{_fmt(s and s['worst'], 3)} | {_fmt(c and c['rms'], 3)} | "
-            f"{_fmt(c and c['worst'], 3)} | {_fmt(c and c['bias'], 2)} |")
+            f"{_fmt(c and c['worst'], 3)} | {_fmt(c and c['bias'], 2)} |"
+        )
     return "\n".join(lines)
 
 
@@ -511,27 +608,45 @@ def _write(out: pathlib.Path, result: ValidationResult, wheel_load, tyre_width):
     out.mkdir(parents=True, exist_ok=True)
     rows = result.data
     files = []
-    cols = {"row": rows["row"], "snow_depth_m": rows["snow_depth_m"],
-            "density_kg_m3": rows["density_kg_m3"], "sinkage_measured_m": rows["sinkage_m"],
-            "coefficient_measured": rows["resistance_coefficient"]}
+    cols = {
+        "row": rows["row"],
+        "snow_depth_m": rows["snow_depth_m"],
+        "density_kg_m3": rows["density_kg_m3"],
+        "sinkage_measured_m": rows["sinkage_m"],
+        "coefficient_measured": rows["resistance_coefficient"],
+    }
     for key, pred in result.predictions.items():
         for q, p in pred.items():
             if p is not None:
                 cols[f"{q}_{key}"] = p
     files.append(_write_csv(out / "predictions.csv", cols))
-    mkeys = ["model", "quantity", "n", "n_rows", "rms", "worst", "bias", "chosen_median",
-             "chosen_min", "chosen_max"]
+    mkeys = [
+        "model",
+        "quantity",
+        "n",
+        "n_rows",
+        "rms",
+        "worst",
+        "bias",
+        "chosen_median",
+        "chosen_min",
+        "chosen_max",
+    ]
     lines = [",".join(mkeys)] + [
         ",".join(str(r[k]) if isinstance(r[k], (str, int)) else _fmt(r[k], 6) for k in mkeys)
-        for r in result.metrics]
+        for r in result.metrics
+    ]
     (out / "metrics.csv").write_text("\n".join(lines) + "\n", encoding="utf-8")
     files.append(out / "metrics.csv")
     files.append(_write_csv(out / "crrel_95_1_examples.csv", result.examples))
     files.append(_figure(result, out / "predicted_vs_measured.png"))
 
     ex = result.examples
-    ex_lines = ["| example | snow | rut depth CRM-1 [cm] | snowjax [cm] | drawbar CRM-1 [N] | "
-                "snowjax [N] | coefficient CRM-1 | snowjax |", "|---|---|---|---|---|---|---|---|"]
+    ex_lines = [
+        "| example | snow | rut depth CRM-1 [cm] | snowjax [cm] | drawbar CRM-1 [N] | "
+        "snowjax [N] | coefficient CRM-1 | snowjax |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for i in range(len(ex["example"])):
         ex_lines.append(
             f"| {int(ex['example'][i])} | {ex['snow_depth_m'][i] * 100:.0f} cm, "
@@ -539,9 +654,11 @@ def _write(out: pathlib.Path, result: ValidationResult, wheel_load, tyre_width):
             f"{ex['rut_depth_report_m'][i] * 100:.1f} | {ex['rut_depth_snowjax_m'][i] * 100:.1f}"
             f" | {ex['drawbar_report_n'][i]:.1f} | {ex['drawbar_snowjax_n'][i]:.1f} | "
             f"{ex['drawbar_coefficient_report'][i]:.3f} | "
-            f"{ex['drawbar_coefficient_snowjax'][i]:.3f} |")
-    implied = rows["density_kg_m3"] * rows["snow_depth_m"] / (
-        rows["snow_depth_m"] - rows["sinkage_m"])
+            f"{ex['drawbar_coefficient_snowjax'][i]:.3f} |"
+        )
+    implied = (
+        rows["density_kg_m3"] * rows["snow_depth_m"] / (rows["snow_depth_m"] - rows["sinkage_m"])
+    )
     skipped = "".join(f"\n- `{k}` skipped: {v}" for k, v in result.skipped.items())
     report = f"""# snowjax validate
 
@@ -550,8 +667,8 @@ def _write(out: pathlib.Path, result: ValidationResult, wheel_load, tyre_width):
 **Shoop (2001), ERDC/CRREL TR-01-16, Table 11** — measured sinkage and snow resistance
 coefficient R/W of leading Michelin XCH4 tyres (radius 0.38 m) of the CRREL Instrumented
 Vehicle in shallow natural snow (Houghton, Michigan; Blaisdell et al. 1990, Richmond 1995).
-{len(rows['row'])} rows used (snow depth {rows['snow_depth_m'].min():.2f}–{rows['snow_depth_m'].max():.2f} m,
-density {rows['density_kg_m3'].min():.0f}–{rows['density_kg_m3'].max():.0f} kg/m³). Wheel load
+{len(rows["row"])} rows used (snow depth {rows["snow_depth_m"].min():.2f}–{rows["snow_depth_m"].max():.2f} m,
+density {rows["density_kg_m3"].min():.0f}–{rows["density_kg_m3"].max():.0f} kg/m³). Wheel load
 {wheel_load:.0f} N and tyre width {tyre_width:.3f} m are not given by Table 11 (load: CRREL 95-7
 Table 2, an interpretation; width: an assumption) — they scale every predicted R/W.
 Source, units and every interpretation: `snowjax/data/shoop_2001_table11.csv`.
@@ -582,8 +699,8 @@ Numbers: `metrics.csv` (also bias and the range of the parameter chosen per fold
 ## CRREL 95-1 worked examples (CRM-1, M113)
 
 Model output, not measurements. snowjax's rut depth is CRREL 95-7 eq. 1 with rho_f from
-the CRREL pressure table (M113 nominal ground pressure {ex['ground_pressure_pa'][0] / 1e3:.0f} kPa
-→ rho_f = {ex['final_density_kg_m3'][0]:.0f} kg/m³); drawbar = T − R − W sin(slope) from the
+the CRREL pressure table (M113 nominal ground pressure {ex["ground_pressure_pa"][0] / 1e3:.0f} kPa
+→ rho_f = {ex["final_density_kg_m3"][0]:.0f} kg/m³); drawbar = T − R − W sin(slope) from the
 printed traction T and resistance R (W = 23,401 lb = {M113_WEIGHT_LB * LB_TO_N:.1f} N). The gross
 traction and resistance equations themselves are not in the stored copy of the report.
 

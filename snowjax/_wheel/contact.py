@@ -62,14 +62,12 @@ def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, int]:
     return n, n
 
 
-
-
 def _check_shear(shear: str) -> None:
     if shear not in SHEAR_MODELS:
         raise ValueError(f"shear must be one of {SHEAR_MODELS}, got {shear!r}")
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes on [0, 1] and weights (summing to 1) of the n-point Gauss–Legendre rule."""
     u, w = np.polynomial.legendre.leggauss(n)
@@ -241,8 +239,12 @@ def _sigma_sin_integral(z0_rel, a, p_w):
 
 # Taylor coefficients of sin(x) / x and cos(x) in powers of x^2, to x^18: on the rim's
 # half-angles |x| <= pi / 4 the truncation error is below 2e-17.
-_SIN_TAYLOR = tuple((-1) ** k / float(np.prod(np.arange(2, 2 * k + 2, dtype=float))) for k in range(10))
-_COS_TAYLOR = tuple((-1) ** k / float(np.prod(np.arange(1, 2 * k + 1, dtype=float))) for k in range(10))
+_SIN_TAYLOR = tuple(
+    (-1) ** k / float(np.prod(np.arange(2, 2 * k + 2, dtype=float))) for k in range(10)
+)
+_COS_TAYLOR = tuple(
+    (-1) ** k / float(np.prod(np.arange(1, 2 * k + 1, dtype=float))) for k in range(10)
+)
 
 
 def _sincos_half(theta):
@@ -558,6 +560,7 @@ def _broadcast_leaves(*trees):
 @eqx.filter_jit
 def _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, layout):
     shape, _, (wheel, snow, theta0, slip) = _broadcast_leaves(wheel, snow, entry_angle, slip)
+
     def forces(braking):
         fn = lambda th, i, wh, sn: _contact_scalar(  # noqa: E731
             th, i, wh.diameter, wh.width, sn, shear, n[braking], braking=braking

@@ -320,8 +320,12 @@ def shear_derivatives(
     # calls of similar sizes share one compilation.
     padded = max(8, 1 << max(size - 1, 0).bit_length())
     flat = [jnp.broadcast_to(a.astype(dtype), shape).reshape(size) for a in arrays]
-    flat = [jnp.concatenate([f, jnp.broadcast_to(f[:1], (padded - size,))]) if size else
-            jnp.zeros(padded, dtype) for f in flat]
+    flat = [
+        jnp.concatenate([f, jnp.broadcast_to(f[:1], (padded - size,))])
+        if size
+        else jnp.zeros(padded, dtype)
+        for f in flat
+    ]
     kk = jax.tree_util.tree_unflatten(treedef, flat[2:])
     out = _derivatives_jit(flat[0], flat[1], kk, model)
     return ShearDerivatives(*(x[:size].reshape(shape) for x in out))

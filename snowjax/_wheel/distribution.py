@@ -53,8 +53,12 @@ class WongReece(eqx.Module):
         fm, fr = WongReece.angle_fractions(self, slip)
         return [
             ("distribution.c1 + c2 * slip", fm, (fm >= 0) & (fm < 1), "in [0, 1)"),
-            ("distribution.c3", self.c3 + 0.0 * fm, (fr > -1) & (fr <= fm),
-             "in (-1, c1 + c2 * slip]"),
+            (
+                "distribution.c3",
+                self.c3 + 0.0 * fm,
+                (fr > -1) & (fr <= fm),
+                "in (-1, c1 + c2 * slip]",
+            ),
         ]
 
     @classmethod

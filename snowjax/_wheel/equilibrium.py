@@ -101,6 +101,7 @@ class WheelState(eqx.Module):
 # Input validation
 # ---------------------------------------------------------------------------------------
 
+
 def _checks(wheel, terrain, distribution, load, slip, shear):
     """Every validity rule: (name, value, ok mask, description of the allowed range).
 
@@ -322,7 +323,11 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
         s = jax.lax.cond(
             jnp.all(ok),
             lambda: s,
-            lambda: jnp.where(ok, s, _bisection(ok, s, s_min, theta_cap, target, slip, wheel, snow, shear, n_nodes)),
+            lambda: jnp.where(
+                ok,
+                s,
+                _bisection(ok, s, s_min, theta_cap, target, slip, wheel, snow, shear, n_nodes),
+            ),
         )
     theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
     w, r, t, m = all_forces(theta0, over & reaches_base)
@@ -374,9 +379,7 @@ def _solve_batch(wheel, snow, load, slip, guess, shear, n, max_steps, layout):
     return _with_rule_for(
         slip,
         shear,
-        lambda braking: _solve_layout(
-            wheel, snow, load, slip, guess, shear, n, max_steps, braking
-        ),
+        lambda braking: _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking),
         layout,
     )
 
@@ -442,6 +445,7 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
 # Any terrain, any stress distribution
 # ---------------------------------------------------------------------------------------
 
+
 def _scan_grid(terrain, dtype):
     """Solver variable s at which W is scanned before Newton (increasing: deep to shallow).
 
@@ -457,7 +461,9 @@ def _scan_grid(terrain, dtype):
     return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
 
 
-def _solve_general_layout(wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking):
+def _solve_general_layout(
+    wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking
+):
     """Equilibrium on any terrain / distribution for a flat batch, one quadrature layout.
 
     Without a warm start, W is first evaluated on a grid of entry angles (`_scan_grid`); the
@@ -564,7 +570,9 @@ def _solve_general_layout(wheel, terrain, distribution, load, slip, guess, shear
 
 
 @eqx.filter_jit
-def _solve_general_jit(wheel, terrain, distribution, load, slip, shear, n, max_steps, guess, layout):
+def _solve_general_jit(
+    wheel, terrain, distribution, load, slip, shear, n, max_steps, guess, layout
+):
     shape, dtype, (wheel, terrain, distribution, load, slip, guess) = _broadcast_leaves(
         wheel, terrain, distribution, load, slip, guess
     )
@@ -709,11 +717,26 @@ def solve_wheel(
     if _is_thesis_path(terrain, distribution):
         n = _nodes_for(shear, nodes_per_panel)
         return _solve_wheel_jit(
-            wheel, terrain, load, slip, shear, n, int(max_steps), initial_entry_angle,
+            wheel,
+            terrain,
+            load,
+            slip,
+            shear,
+            n,
+            int(max_steps),
+            initial_entry_angle,
             _layout(slip),
         )
     n = _general_nodes_for(shear, nodes_per_panel)
     return _solve_general_jit(
-        wheel, terrain, distribution, load, slip, shear, n, int(max_steps),
-        initial_entry_angle, _layout(slip),
+        wheel,
+        terrain,
+        distribution,
+        load,
+        slip,
+        shear,
+        n,
+        int(max_steps),
+        initial_entry_angle,
+        _layout(slip),
     )

@@ -50,7 +50,7 @@ def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, in
     return n, n
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     u, w = np.polynomial.legendre.leggauss(n)
     return (u + 1) / 2, w / 2
@@ -166,9 +166,7 @@ def general_contact(
     if braking and shear != "none":
         split, has_root = _braking_split(theta0, theta_r, slip, diameter)
         split = jax.lax.stop_gradient(split)
-        z_split = _rim_sinkage_between(
-            jnp.where(split >= theta_m, split, theta0), theta0, diameter
-        )
+        z_split = _rim_sinkage_between(jnp.where(split >= theta_m, split, theta0), theta0, diameter)
         k_split = terrain.rim_properties(z_split, width)[3]
         slope = jnp.abs(-1 + (1 - slip) * jnp.cos(split))
         split_scale = jnp.where(has_root, k_split / (r * jnp.maximum(slope, 1e-12)), inf)

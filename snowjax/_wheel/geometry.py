@@ -1,5 +1,4 @@
-"""The rigid wheel (the thesis's model of a tyre on soft snow, section 4.1).
-"""
+"""The rigid wheel (the thesis's model of a tyre on soft snow, section 4.1)."""
 
 from __future__ import annotations
 
