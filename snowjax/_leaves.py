@@ -13,9 +13,15 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+from jax.core import Tracer
 
 
-def _as_float(x):
+def _is_traced(x: Any) -> bool:
+    """True for a JAX tracer (inside `jit`, `vmap`, `grad`): its value is not known yet."""
+    return isinstance(x, Tracer)
+
+
+def _as_float(x: Any) -> Any:
     """Converter for parameter leaves: arrays of a floating dtype, other objects untouched.
 
     Python ints become the default float type; existing floating arrays keep their dtype,
@@ -31,10 +37,6 @@ def _as_float(x):
     if not jnp.issubdtype(arr.dtype, jnp.floating):
         arr = arr.astype(jnp.result_type(float))
     return arr
-
-
-def _leaf():
-    return eqx.field(converter=_as_float)
 
 
 def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:

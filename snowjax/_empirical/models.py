@@ -27,11 +27,12 @@ import math
 from typing import Literal
 
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import jax.scipy.special as jsp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
+
+from .._leaves import _is_traced as _traced
 
 __all__ = [
     "net_traction_coefficient",
@@ -70,7 +71,7 @@ _BRIXIUS_SLIP_COEFFICIENTS = {
 
 
 def _is_traced(*values) -> bool:
-    return any(isinstance(v, jax.core.Tracer) for v in values)
+    return any(_traced(v) for v in values)
 
 
 def _describe(value) -> str:

@@ -57,7 +57,7 @@ import optimistix as optx
 from jaxtyping import ArrayLike, Float
 
 from .._constants import DEFAULT_SHEAR_MODULUS
-from .._leaves import _module_leaves, _parameter_names, _with_leaves
+from .._leaves import _is_traced, _module_leaves, _parameter_names, _with_leaves
 from .._terrain.base import Terrain
 from .._terrain.bekker import BekkerSoil, bekker_pressure
 from .._terrain.reece import reece_pressure
@@ -532,7 +532,7 @@ def _not_converged(steps: int, max_steps: int) -> str:
 
 def _vector(name: str, x, *, min_size: int = 1) -> np.ndarray:
     """A finite 1-D float array, or a ValueError naming `name`."""
-    if isinstance(x, jax.core.Tracer):
+    if _is_traced(x):
         raise TypeError(f"{name} must be a concrete array (the fits are not traceable)")
     try:
         arr = np.asarray(x, dtype=float)

@@ -74,7 +74,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._leaves import _as_float
+from .._leaves import _as_float, _is_traced
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel, _check_shear
 from .._wheel.distribution import WongReece
@@ -199,7 +199,7 @@ _wheel_forces_jit = eqx.filter_jit(_wheel_forces)
 
 
 def _check_concrete(name, value, ok, allowed):
-    if isinstance(value, jax.core.Tracer) or value is None:
+    if _is_traced(value) or value is None:
         return
     arr = np.asarray(value, dtype=float)
     if not np.all(np.isfinite(arr) & ok(arr)):
@@ -632,7 +632,7 @@ def _check_profile(profile, n):
             "TorqueProfile: times must have shape (k,) and values (k,) or (k, num_wheels);"
             f" got {times.shape} and {values.shape} for {n} wheels"
         )
-    if not isinstance(times, jax.core.Tracer) and not np.all(np.diff(np.asarray(times)) > 0):
+    if not _is_traced(times) and not np.all(np.diff(np.asarray(times)) > 0):
         raise ValueError("TorqueProfile: times must be strictly increasing")
 
 

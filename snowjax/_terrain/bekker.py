@@ -11,7 +11,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import (
     DEFAULT_SHEAR_MODULUS,
 )
-from .._leaves import _as_float, _leaf
+from .._leaves import _as_float
 from .base import Terrain, _clip_negative, _safe_power
 
 
@@ -58,11 +58,11 @@ class BekkerSoil(Terrain):
       since Wong's Table 2.3 gives no K for its snows).
     """
 
-    n: Float[Array, "..."] = _leaf()
-    k_c: Float[Array, "..."] = _leaf()
-    k_phi: Float[Array, "..."] = _leaf()
-    cohesion: Float[Array, "..."] = _leaf()
-    tan_phi: Float[Array, "..."] = _leaf()
+    n: Float[Array, "..."] = eqx.field(converter=_as_float)
+    k_c: Float[Array, "..."] = eqx.field(converter=_as_float)
+    k_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
     shear_modulus: Float[Array, "..."] = eqx.field(
         converter=_as_float, default=DEFAULT_SHEAR_MODULUS, kw_only=True
     )

@@ -11,7 +11,7 @@ from jaxtyping import Array, Float
 from .._constants import (
     THESIS_DIAMETER,
 )
-from .._leaves import _leaf
+from .._leaves import _as_float
 from .base import Terrain
 from .wong import WongSnow, wong_pressure
 
@@ -51,7 +51,7 @@ class LayeredSnow(Terrain):
 
     top: WongSnow
     bottom: WongSnow
-    ice_failure_pressure: Float[Array, "..."] = _leaf()
+    ice_failure_pressure: Float[Array, "..."] = eqx.field(converter=_as_float)
 
     label: ClassVar[str] = "snow"
 

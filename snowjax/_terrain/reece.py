@@ -9,7 +9,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import (
     DEFAULT_SHEAR_MODULUS,
 )
-from .._leaves import _as_float, _leaf
+from .._leaves import _as_float
 from .base import Terrain, _clip_negative, _safe_power
 
 
@@ -59,12 +59,12 @@ class ReeceSoil(Terrain):
     - `shear_modulus`: K [m] (keyword; default `DEFAULT_SHEAR_MODULUS` = 10 mm).
     """
 
-    n: Float[Array, "..."] = _leaf()
-    k_c_prime: Float[Array, "..."] = _leaf()
-    k_phi_prime: Float[Array, "..."] = _leaf()
-    unit_weight: Float[Array, "..."] = _leaf()
-    cohesion: Float[Array, "..."] = _leaf()
-    tan_phi: Float[Array, "..."] = _leaf()
+    n: Float[Array, "..."] = eqx.field(converter=_as_float)
+    k_c_prime: Float[Array, "..."] = eqx.field(converter=_as_float)
+    k_phi_prime: Float[Array, "..."] = eqx.field(converter=_as_float)
+    unit_weight: Float[Array, "..."] = eqx.field(converter=_as_float)
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
     shear_modulus: Float[Array, "..."] = eqx.field(
         converter=_as_float, default=DEFAULT_SHEAR_MODULUS, kw_only=True
     )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from typing import ClassVar
 
+import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
@@ -12,7 +13,7 @@ from .._constants import (
     THESIS_DIAMETER,
     THESIS_P_W,
 )
-from .._leaves import _leaf
+from .._leaves import _as_float
 from .base import Terrain, _clip_negative
 
 
@@ -76,11 +77,11 @@ class WongSnow(Terrain):
     - `shear_modulus`: K, the shear deformation modulus of eq. (4.11) [m].
     """
 
-    p_w: Float[Array, "..."] = _leaf()
-    z_w: Float[Array, "..."] = _leaf()
-    cohesion: Float[Array, "..."] = _leaf()
-    tan_phi: Float[Array, "..."] = _leaf()
-    shear_modulus: Float[Array, "..."] = _leaf()
+    p_w: Float[Array, "..."] = eqx.field(converter=_as_float)
+    z_w: Float[Array, "..."] = eqx.field(converter=_as_float)
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
+    shear_modulus: Float[Array, "..."] = eqx.field(converter=_as_float)
 
     label: ClassVar[str] = "snow"
 

@@ -49,7 +49,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _leaf
+from .._leaves import _as_float, _is_traced
 
 __all__ = [
     "longitudinal_slip",
@@ -132,7 +132,7 @@ def _check(name: str, value, ok, allowed: str) -> None:
     Traced values (inside `jit`, `vmap`, `grad`) are not checked; the model then returns
     finite numbers for them (see the module docstring for the intended ranges).
     """
-    if value is None or isinstance(value, jax.core.Tracer):
+    if value is None or _is_traced(value):
         return
     arr = np.asarray(value)
     with np.errstate(invalid="ignore"):
@@ -430,11 +430,11 @@ class TireParameters(eqx.Module):
     - `e1`: first-order contact pressure constant E1 [-] (3.10, 3.21); E2 = E1² + 1/12.
     """
 
-    c_s: Float[Array, "..."] = _leaf()
-    c_alpha: Float[Array, "..."] = _leaf()
-    mu_x: Float[Array, "..."] = _leaf()
-    mu_y: Float[Array, "..."] = _leaf()
-    e1: Float[Array, "..."] = _leaf()
+    c_s: Float[Array, "..."] = eqx.field(converter=_as_float)
+    c_alpha: Float[Array, "..."] = eqx.field(converter=_as_float)
+    mu_x: Float[Array, "..."] = eqx.field(converter=_as_float)
+    mu_y: Float[Array, "..."] = eqx.field(converter=_as_float)
+    e1: Float[Array, "..."] = eqx.field(converter=_as_float)
 
 
 class TireForces(eqx.Module):
@@ -605,18 +605,18 @@ class TireCoefficients(eqx.Module):
     16.7 and 46.8 kN).
     """
 
-    A1: Float[Array, "..."] = _leaf()
-    A2: Float[Array, "..."] = _leaf()
-    A3: Float[Array, "..."] = _leaf()
-    A4: Float[Array, "..."] = _leaf()
-    A5: Float[Array, "..."] = _leaf()
-    B1: Float[Array, "..."] = _leaf()
-    B2: Float[Array, "..."] = _leaf()
-    B3: Float[Array, "..."] = _leaf()
-    B4: Float[Array, "..."] = _leaf()
-    B5: Float[Array, "..."] = _leaf()
-    a1: Float[Array, "..."] = _leaf()
-    a2: Float[Array, "..."] = _leaf()
+    A1: Float[Array, "..."] = eqx.field(converter=_as_float)
+    A2: Float[Array, "..."] = eqx.field(converter=_as_float)
+    A3: Float[Array, "..."] = eqx.field(converter=_as_float)
+    A4: Float[Array, "..."] = eqx.field(converter=_as_float)
+    A5: Float[Array, "..."] = eqx.field(converter=_as_float)
+    B1: Float[Array, "..."] = eqx.field(converter=_as_float)
+    B2: Float[Array, "..."] = eqx.field(converter=_as_float)
+    B3: Float[Array, "..."] = eqx.field(converter=_as_float)
+    B4: Float[Array, "..."] = eqx.field(converter=_as_float)
+    B5: Float[Array, "..."] = eqx.field(converter=_as_float)
+    a1: Float[Array, "..."] = eqx.field(converter=_as_float)
+    a2: Float[Array, "..."] = eqx.field(converter=_as_float)
 
     @classmethod
     def thesis(cls) -> "TireCoefficients":
@@ -869,7 +869,7 @@ def shear_force_variation_ratios(
     _check("slip", slip, lambda x: x <= 1, "a driving slip <= 1")
     _check("load_1", load_1, lambda x: x > 0, "a normal load > 0 N")
     _check("load_2", load_2, lambda x: x > 0, "a normal load > 0 N")
-    if not isinstance(load_1, jax.core.Tracer) and not isinstance(load_2, jax.core.Tracer):
+    if not _is_traced(load_1) and not _is_traced(load_2):
         if np.any(np.asarray(load_1) == np.asarray(load_2)):
             raise ValueError("`load_1` and `load_2` must differ.")
     return _ratios_jit(

@@ -35,6 +35,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
+from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
@@ -527,7 +528,7 @@ def _layout(slip) -> str:
     Traced slips (under `jit`, `vmap`, `grad`) get the general "braking" layout, which is
     valid for every slip, so that only one variant is compiled.
     """
-    if isinstance(slip, jax.core.Tracer):
+    if _is_traced(slip):
         return "braking"
     return "braking" if np.any(np.asarray(slip) < 0) else "driving"
 

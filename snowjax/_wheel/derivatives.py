@@ -62,7 +62,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _leaf
+from .._leaves import _as_float
 
 __all__ = [
     "DimensionlessConstants",
@@ -96,11 +96,11 @@ class DimensionlessConstants(eqx.Module):
     - `tan_phi`: tan φ, material [-].
     """
 
-    z_w_over_d: Float[Array, "..."] = _leaf()
-    entry_angle: Float[Array, "..."] = _leaf()
-    c_over_p_w: Float[Array, "..."] = _leaf()
-    u_k: Float[Array, "..."] = _leaf()
-    tan_phi: Float[Array, "..."] = _leaf()
+    z_w_over_d: Float[Array, "..."] = eqx.field(converter=_as_float)
+    entry_angle: Float[Array, "..."] = eqx.field(converter=_as_float)
+    c_over_p_w: Float[Array, "..."] = eqx.field(converter=_as_float)
+    u_k: Float[Array, "..."] = eqx.field(converter=_as_float)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
 
     @classmethod
     def thesis(cls) -> "DimensionlessConstants":

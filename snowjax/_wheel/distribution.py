@@ -12,7 +12,7 @@ from __future__ import annotations
 import equinox as eqx
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _as_float, _leaf
+from .._leaves import _as_float
 
 __all__ = ["WongReece"]
 
@@ -40,8 +40,8 @@ class WongReece(eqx.Module):
     concrete inputs raise `ValueError`): `0 <= c1 + c2 i < 1` and `-1 < c3 <= c1 + c2 i`.
     """
 
-    c1: Float[Array, "..."] = _leaf()
-    c2: Float[Array, "..."] = _leaf()
+    c1: Float[Array, "..."] = eqx.field(converter=_as_float)
+    c2: Float[Array, "..."] = eqx.field(converter=_as_float)
     c3: Float[Array, "..."] = eqx.field(converter=_as_float, default=0.0)
 
     def angle_fractions(self, slip: Float[ArrayLike, "..."]) -> tuple[Array, Array]:

@@ -28,6 +28,7 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
+from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._terrain.layered import LayeredSnow
 from .._terrain.wong import WongSnow
@@ -128,7 +129,7 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
 
 
 def _is_concrete(x) -> bool:
-    return not isinstance(x, jax.core.Tracer)
+    return not _is_traced(x)
 
 
 def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:

@@ -6,7 +6,7 @@ import equinox as eqx
 from jaxtyping import Array, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
-from .._leaves import _leaf
+from .._leaves import _as_float
 
 
 class RigidWheel(eqx.Module):
@@ -18,8 +18,8 @@ class RigidWheel(eqx.Module):
     - `width`: b [m].
     """
 
-    diameter: Float[Array, "..."] = _leaf()
-    width: Float[Array, "..."] = _leaf()
+    diameter: Float[Array, "..."] = eqx.field(converter=_as_float)
+    width: Float[Array, "..."] = eqx.field(converter=_as_float)
 
     @property
     def radius(self) -> Array:
