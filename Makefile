@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: reproduce test test-all bench clean
+.PHONY: reproduce test test-all lint bench clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -15,9 +15,17 @@ $(STAMP): pyproject.toml
 reproduce: $(STAMP)
 	$(BIN)/snowjax reproduce $(ARGS)
 
-# Two workers: XLA:CPU runs each compiled solve on one thread.
-test: $(STAMP)
+LINTED := snowjax tests benchmarks notebooks
+
+# Lint, format and type checks first (seconds), then the suite on two workers: XLA:CPU runs
+# each compiled solve on one thread.
+test: lint
 	$(BIN)/python -m pytest -q -n 2 -m "not slow" $(ARGS)
+
+lint: $(STAMP)
+	$(BIN)/ruff check $(LINTED)
+	$(BIN)/ruff format --check $(LINTED)
+	$(BIN)/pyright snowjax
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q $(ARGS)

@@ -263,16 +263,19 @@ def main(argv=None):
             ),
         }
         for name, (terrain, dist, wheel, ld) in terrains.items():
-            run = lambda: sj.solve_wheel(
-                wheel, terrain, ld, slip, distribution=dist
-            ).entry_angle.block_until_ready()  # noqa: E731,B023
+
+            def run(wheel=wheel, terrain=terrain, ld=ld, dist=dist):
+                st = sj.solve_wheel(wheel, terrain, ld, slip, distribution=dist)
+                st.entry_angle.block_until_ready()
+
             run()
             t = best_time(run, 2)
             numbers[f"throughput_{name}"] = n_ref / t
             add(
                 f"solve_wheel {name}, batch {n_ref:,}",
                 f"{n_ref / t:,.0f} /s",
-                f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; loads "
+                f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; "
+                + "loads "
                 + ("1-9 kN" if ld is load else f"1-9 kN / {9 if 'Bekker' in name else 4}"),
             )
         progress.advance(task)

@@ -39,45 +39,45 @@ from ._wheel.equilibrium import solve_wheel as solve_wheel
 from ._tire.tire import TireCoefficients as TireCoefficients
 from ._tire.tire import TireParameters as TireParameters
 from ._tire.tire import TireForces as TireForces
-from ._tire.tire import TireSensitivities as TireSensitivities
-from ._tire.tire import ShearForceVariationRatios as ShearForceVariationRatios
+from ._tire.sensitivity import TireSensitivities as TireSensitivities
+from ._tire.sensitivity import ShearForceVariationRatios as ShearForceVariationRatios
 from ._tire.tire import tire_forces as tire_forces
 from ._tire.tire import tire_forces_from_parameters as tire_forces_from_parameters
 from ._tire.tire import tire_parameters as tire_parameters
-from ._tire.tire import tire_force_sensitivities as tire_force_sensitivities
-from ._tire.tire import shear_force_variation_ratios as shear_force_variation_ratios
+from ._tire.sensitivity import tire_force_sensitivities as tire_force_sensitivities
+from ._tire.sensitivity import shear_force_variation_ratios as shear_force_variation_ratios
 from ._tire.tire import longitudinal_stiffness as longitudinal_stiffness
 from ._tire.tire import lateral_stiffness as lateral_stiffness
 from ._tire.tire import longitudinal_friction as longitudinal_friction
 from ._tire.tire import lateral_friction as lateral_friction
 from ._tire.tire import contact_pressure_constant as contact_pressure_constant
-from ._tire.tire import shear_distribution as shear_distribution
-from ._tire.tire import normalized_longitudinal_slip as normalized_longitudinal_slip
-from ._tire.tire import normalized_lateral_slip as normalized_lateral_slip
-from ._tire.tire import normalized_combined_slip as normalized_combined_slip
+from ._tire.slip import shear_distribution as shear_distribution
+from ._tire.slip import normalized_longitudinal_slip as normalized_longitudinal_slip
+from ._tire.slip import normalized_lateral_slip as normalized_lateral_slip
+from ._tire.slip import normalized_combined_slip as normalized_combined_slip
 from ._tire.tire import pure_longitudinal_force as pure_longitudinal_force
 from ._tire.tire import pure_lateral_force as pure_lateral_force
-from ._tire.tire import longitudinal_slip as longitudinal_slip
-from ._tire.tire import driving_slip as driving_slip
-from ._tire.tire import braking_slip as braking_slip
-from ._tire.tire import longitudinal_from_driving_slip as longitudinal_from_driving_slip
-from ._tire.tire import driving_from_longitudinal_slip as driving_from_longitudinal_slip
-from ._tire.tire import longitudinal_from_braking_slip as longitudinal_from_braking_slip
-from ._tire.tire import braking_from_longitudinal_slip as braking_from_longitudinal_slip
+from ._tire.slip import longitudinal_slip as longitudinal_slip
+from ._tire.slip import driving_slip as driving_slip
+from ._tire.slip import braking_slip as braking_slip
+from ._tire.slip import longitudinal_from_driving_slip as longitudinal_from_driving_slip
+from ._tire.slip import driving_from_longitudinal_slip as driving_from_longitudinal_slip
+from ._tire.slip import longitudinal_from_braking_slip as longitudinal_from_braking_slip
+from ._tire.slip import braking_from_longitudinal_slip as braking_from_longitudinal_slip
 
 # --- empirical (chapter 2) ---
 from ._empirical.models import bekker_compaction_resistance as bekker_compaction_resistance
 from ._empirical.models import bekker_rolling_resistance as bekker_rolling_resistance
 from ._empirical.models import bekker_wheel_sinkage as bekker_wheel_sinkage
-from ._empirical.models import brixius as brixius
-from ._empirical.models import brixius_wheel_numeric as brixius_wheel_numeric
-from ._empirical.models import BrixiusTraction as BrixiusTraction
-from ._empirical.models import compare_motion_resistance as compare_motion_resistance
-from ._empirical.models import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
-from ._empirical.models import gross_traction_coefficient as gross_traction_coefficient
-from ._empirical.models import net_traction_coefficient as net_traction_coefficient
+from ._empirical.traction import brixius as brixius
+from ._empirical.traction import brixius_wheel_numeric as brixius_wheel_numeric
+from ._empirical.traction import BrixiusTraction as BrixiusTraction
+from ._empirical.comparison import compare_motion_resistance as compare_motion_resistance
+from ._empirical.traction import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
+from ._empirical.traction import gross_traction_coefficient as gross_traction_coefficient
+from ._empirical.traction import net_traction_coefficient as net_traction_coefficient
 from ._empirical.models import richmond_resistance as richmond_resistance
-from ._empirical.models import rolling_resistance_coefficient as rolling_resistance_coefficient
+from ._empirical.traction import rolling_resistance_coefficient as rolling_resistance_coefficient
 from ._empirical.models import van_es_compaction_resistance as van_es_compaction_resistance
 from ._empirical.models import van_es_rolling_resistance as van_es_rolling_resistance
 
@@ -101,8 +101,8 @@ from ._sim.simulation import wheel_kinematics as wheel_kinematics
 
 # --- sweeps ---
 from ._sweep.sweep import SweepResult as SweepResult
-from ._sweep.sweep import iter_sweep_chunks as iter_sweep_chunks
-from ._sweep.sweep import load_sweep as load_sweep
+from ._sweep.storage import iter_sweep_chunks as iter_sweep_chunks
+from ._sweep.storage import load_sweep as load_sweep
 from ._sweep.sweep import sweep as sweep
 
 # --- reproduction of the thesis; closed-form derivatives of chapter 4 ---
@@ -136,4 +136,6 @@ from ._validate.validate import validate as validate
 from ._validate.validate import validation_models as validation_models
 from ._validate.validate import wheel_validation_model as wheel_validation_model
 
-__version__ = "0.1.0"
+from ._constants import VERSION
+
+__version__ = VERSION

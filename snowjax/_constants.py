@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+from importlib.metadata import version
+
+# The installed distribution's version (pyproject.toml).
+VERSION = version("snowjax")
+
 # The thesis does not give p_w.  Table 4.1 lists an entry angle of 53.6747 deg, which is
 # exactly a sinkage z0 = D/2 (1 - cos theta0) = 0.1500 m = 0.75 z_w.  We take that state
 # as the no-shear equilibrium (eq. 4.14 with tau = 0) at F_z = 5 kN, the middle of the

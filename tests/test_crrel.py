@@ -1,4 +1,4 @@
-"""Tests of the CRREL shallow-snow model (snowjax/_crrel.py).
+"""Tests of the CRREL shallow-snow model (snowjax/_empirical/crrel.py).
 
 Hand values come from the reports: CRREL 95-1 Table A5 (CRM-1 sample runs, M113) and the
 CRREL 95-7 final-density table; the arithmetic is written out with `math`.

@@ -2,7 +2,7 @@
 
 The reference for every derivative is a central finite difference of an independent NumPy
 implementation of eqs. (4.1a), (4.5), (4.10), (4.11) and (4.13), written here in
-dimensional form from the thesis; the published closed forms (snowjax._derivatives.
+dimensional form from the thesis; the published closed forms (snowjax/_wheel/derivatives.py
 thesis_table_*) are then compared with autodiff.  Where the thesis is wrong, the test
 asserts that the printed form disagrees and that the corrected form agrees.
 """
@@ -161,7 +161,7 @@ def test_table_4_6_y2_at_zero_has_a_sign_error():
     for slip in (0.0, 0.3, 0.9):
         u1 = tau1 * (slip + tau2)
         hand = -(u1**2) + 2 * u1 * TAN_PHI  # from y2 of Table 4.5 with U0 = U2 = 0
-        fd = fd2(lambda x: tau_bar_simplified_np(x, slip), 2e-3, 2e-3)  # centred at 2e-3
+        fd = fd2(lambda x, slip=slip: tau_bar_simplified_np(x, slip), 2e-3, 2e-3)  # centred at 2e-3
         auto = float(dv.shear_derivatives(0.0, slip, model="simplified").y2)
         printed = float(dv.thesis_table_4_6(slip)["y2"][0])
         corrected = float(dv.thesis_table_4_6(slip, as_printed=False)["y2"][0])
@@ -189,7 +189,7 @@ def test_table_4_4_zero_sinkage_values():
         assert float(exact["y2"][0]) == pytest.approx(float(auto.y2), rel=1e-10)
         # Independent: one-sided second difference of the NumPy model at sigma_bar = 0.
         h = 1e-4
-        f = lambda x: tau_bar_classic_np(x, slip)
+        f = lambda x, slip=slip: tau_bar_classic_np(x, slip)
         fd = (2 * f(0.0) - 5 * f(h) + 4 * f(2 * h) - f(3 * h)) / h**2
         assert fd == pytest.approx(float(auto.y2), rel=1e-4)
 

@@ -1,4 +1,4 @@
-"""Tests of the empirical models of chapter 2 (snowjax/_empirical.py).
+"""Tests of the empirical models of chapter 2 (snowjax/_empirical/).
 
 Expected values are hand arithmetic written out with `math` (independent of the code under
 test); gradients are checked against central finite differences.

@@ -1,4 +1,4 @@
-"""Tests of the tire shear-force model of chapter 3 (snowjax._tire).
+"""Tests of the tire shear-force model of chapter 3 (snowjax/_tire/).
 
 Expected values are hand arithmetic on the thesis's published numbers, written here as
 plain Python floats; none is produced by the code under test.
@@ -467,7 +467,7 @@ def test_grad_matches_central_differences():
     fields = ["combined", "pure", "fx_combined", "fy_combined", "fx_pure", "beta_pure"]
     grads = jax.jit(
         lambda x: {
-            name: jax.grad(lambda y: getattr(sj.tire_forces(y[0], y[1], y[2]), name))(x)
+            name: jax.grad(lambda y, name=name: getattr(sj.tire_forces(y[0], y[1], y[2]), name))(x)
             for name in fields
         }
     )(jnp.asarray(x0))
@@ -576,8 +576,8 @@ def test_sensitivities_against_hand_derivatives_and_finite_differences():
     # Each parameter derivative against central differences of the explicit-parameter API.
     k = 2
     for name, h in [("c_s", 1.0), ("c_alpha", 1.0), ("mu_x", 1e-6), ("mu_y", 1e-6), ("e1", 1e-6)]:
-        up = eqx.tree_at(lambda q: getattr(q, name), p, getattr(p, name) + h)
-        dn = eqx.tree_at(lambda q: getattr(q, name), p, getattr(p, name) - h)
+        up = eqx.tree_at(lambda q, name=name: getattr(q, name), p, getattr(p, name) + h)
+        dn = eqx.tree_at(lambda q, name=name: getattr(q, name), p, getattr(p, name) - h)
         fu = sj.tire_forces_from_parameters(load, slip[k], alpha[k], up)
         fd = sj.tire_forces_from_parameters(load, slip[k], alpha[k], dn)
         for field in ("fx_pure", "fy_pure", "pure", "fx_combined", "fy_combined", "combined"):

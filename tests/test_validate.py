@@ -1,4 +1,4 @@
-"""Tests of `snowjax validate` (snowjax/_validate.py, _cli_validate.py).
+"""Tests of `snowjax validate` (snowjax/_validate/, snowjax/_cli/validate.py).
 
 One run of the CLI on the shipped data (module fixture); the checks recompute the
 reported numbers independently from the CSVs it writes.

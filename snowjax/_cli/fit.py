@@ -34,6 +34,7 @@ import json
 import math
 import pathlib
 import sys
+from typing import Any
 
 _PLATE_HELP = "columns: sinkage_m, pressure_Pa (or pressure_kPa), plate_size_m (or --plate-size)"
 _TIRE_HELP = "columns: load_kN, cs, ca [kN/rad], mux, muy, e1 (the units of thesis Table 3.2)"
@@ -325,7 +326,7 @@ def run(args) -> int:
                     raise ValueError(f"give --fit: the parameters to fit, among {names}")
                 fit_text = "p_w,z_w,tan_phi"
             names = tuple(s.strip() for s in fit_text.split(",") if s.strip())
-            measured = {q: np.array(cols[c]) for q, c in (
+            measured: dict[str, Any] = {q: np.array(cols[c]) for q, c in (
                 ("sinkage", "sinkage_m"), ("drawbar_pull", "drawbar_pull_N"),
                 ("motion_resistance", "motion_resistance_N")) if c in cols}  # fmt: skip
             result = _fit.fit_wheel(

@@ -72,7 +72,7 @@ def register(sub) -> None:
     p = sub.add_parser(
         "sweep",
         help="chunked, resumable sweeps of the wheel equilibrium to disk",
-        description=__doc__.split("\n\n", 1)[1],
+        description=(__doc__ or "").split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--loads", default="2000:8000:13", help="wheel loads [N] (default %(default)s)")

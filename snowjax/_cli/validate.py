@@ -1,7 +1,7 @@
 """`snowjax validate`: compare the models with measured snow data and write `report.md`.
 
 `snowjax validate [--out DIR] [--include-uncertain] [--wheel-load N] [--tyre-width M]` runs
-`snowjax.validate` (snowjax/_validate.py): leave-one-out predictions of Shoop (2001),
+`snowjax.validate` (snowjax/_validate/): leave-one-out predictions of Shoop (2001),
 ERDC/CRREL TR-01-16 Table 11 (sinkage and snow resistance coefficient of a leading tyre) by
 the CRREL shallow-snow model, Richmond (2.23), the chapter-4 rigid wheel (Wong and Bekker
 snow), Bekker (2.24/2.25) and Van Es (2.26), plus the CRM-1 worked examples of CRREL 95-1.

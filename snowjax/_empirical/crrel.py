@@ -35,15 +35,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
-from .models import (
-    ICE_DENSITY,
-    _check,
-    _nan_unless,
-    _nonnegative,
-    _positive,
-    _safe,
-    richmond_resistance,
-)
+from .common import ICE_DENSITY, _check, _nan_unless, _nonnegative, _positive, _safe
+from .models import richmond_resistance
 
 __all__ = [
     "CRREL_FINAL_DENSITIES",

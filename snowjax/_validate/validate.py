@@ -463,6 +463,7 @@ def validate(
                 table = {"sinkage": z, "coefficient": mu}
                 pred, chosen = {}, None
                 if model.grid is not None:
+                    assert model.fit_target is not None  # a grid model names its target
                     fit = np.asarray(table[model.fit_target], dtype=float)
                     _, chosen = _loo_from_grid(fit, measured[model.fit_target])
                 for q, t in table.items():
@@ -477,7 +478,8 @@ def validate(
                     continue
                 err = p - measured[q]
                 finite = np.isfinite(err)
-                params = None if chosen is None else model.grid[chosen]
+                grid_size = 0 if model.grid is None else len(model.grid)
+                params = None if chosen is None or model.grid is None else model.grid[chosen]
                 metrics.append(
                     {
                         "model": model.key,
@@ -496,7 +498,7 @@ def validate(
                         "chosen_max": None if params is None else float(np.max(params)),
                         "at_grid_edge": bool(
                             params is not None
-                            and (np.any(chosen == 0) or np.any(chosen == len(model.grid) - 1))
+                            and (np.any(chosen == 0) or np.any(chosen == grid_size - 1))
                         ),
                     }
                 )
@@ -660,6 +662,7 @@ def _write(out: pathlib.Path, result: ValidationResult, wheel_load, tyre_width):
         rows["density_kg_m3"] * rows["snow_depth_m"] / (rows["snow_depth_m"] - rows["sinkage_m"])
     )
     skipped = "".join(f"\n- `{k}` skipped: {v}" for k, v in result.skipped.items())
+    depth, density = rows["snow_depth_m"], rows["density_kg_m3"]
     report = f"""# snowjax validate
 
 ## Data
@@ -667,8 +670,8 @@ def _write(out: pathlib.Path, result: ValidationResult, wheel_load, tyre_width):
 **Shoop (2001), ERDC/CRREL TR-01-16, Table 11** — measured sinkage and snow resistance
 coefficient R/W of leading Michelin XCH4 tyres (radius 0.38 m) of the CRREL Instrumented
 Vehicle in shallow natural snow (Houghton, Michigan; Blaisdell et al. 1990, Richmond 1995).
-{len(rows["row"])} rows used (snow depth {rows["snow_depth_m"].min():.2f}–{rows["snow_depth_m"].max():.2f} m,
-density {rows["density_kg_m3"].min():.0f}–{rows["density_kg_m3"].max():.0f} kg/m³). Wheel load
+{len(rows["row"])} rows used (snow depth {depth.min():.2f}–{depth.max():.2f} m,
+density {density.min():.0f}–{density.max():.0f} kg/m³). Wheel load
 {wheel_load:.0f} N and tyre width {tyre_width:.3f} m are not given by Table 11 (load: CRREL 95-7
 Table 2, an interpretation; width: an assumption) — they scale every predicted R/W.
 Source, units and every interpretation: `snowjax/data/shoop_2001_table11.csv`.

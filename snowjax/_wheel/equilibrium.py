@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import enum
 import math
+from typing import cast
 
 import equinox as eqx
 import jax
@@ -254,11 +255,11 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     reaches_base = theta_base <= MAX_ENTRY_ANGLE
     n_nodes = n[braking]
 
-    def vertical_load(theta0):
+    def vertical_load(theta0) -> Array:
         fn = lambda th, i, d, b, sn: _contact_scalar(  # noqa: E731
             th, i, d, b, sn, shear, n_nodes, None, braking, vertical_only=True
         )
-        return jax.vmap(fn)(theta0, slip, diameter, width, snow)
+        return cast(Array, jax.vmap(fn)(theta0, slip, diameter, width, snow))
 
     def all_forces(theta0, bottomed):
         fn = lambda th, i, d, b, sn, bt: _contact_scalar(  # noqa: E731
@@ -425,7 +426,7 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
     wheel, snow, load, slip, _ = _safe_inputs(valid, wheel, snow, load, slip)
 
     theta0, r, t, m, status = _in_chunks(
-        lambda ops: _solve_batch(*ops, shear, n, max_steps, layout),
+        lambda ops: _solve_batch(*ops, shear=shear, n=n, max_steps=max_steps, layout=layout),
         (wheel, snow, load, slip, guess),
         load.shape[0],
     )
@@ -490,12 +491,15 @@ def _solve_general_layout(
         )
         return jax.vmap(fn)(theta0, slip, diameter, width, terrain, fractions)
 
+    def vertical(theta0) -> Array:  # W alone
+        return cast(Array, contact(theta0, True))
+
     s_min = jnp.full_like(load, S_MIN)
     s_max = jnp.full_like(load, S_MAX)
     if guess is None:
         s_grid = _scan_grid(terrain, dtype)
         points = s_grid.shape[0]
-        w_grid = jax.vmap(lambda s: contact(_theta_from_s(s, theta_cap), True))(
+        w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
             jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
         )
         w_grid = jax.lax.stop_gradient(w_grid)
@@ -514,14 +518,14 @@ def _solve_general_layout(
         frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
         s0 = jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
     else:
-        w_top = jax.lax.stop_gradient(contact(_theta_from_s(s_min, theta_cap), True))
+        w_top = jax.lax.stop_gradient(vertical(_theta_from_s(s_min, theta_cap)))
         over = w_top < load
         target = jnp.where(over, 0.5 * w_top, load)
         lower, upper = s_min, s_max
         s0 = _warm_start(guess, theta_cap)
 
     def residual(s, args):
-        w = contact(_theta_from_s(s, theta_cap), True)
+        w = vertical(_theta_from_s(s, theta_cap))
         return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
 
     newton = optx.root_find(

@@ -2,7 +2,7 @@
 
 This is the path `solve_wheel` and `contact_forces` take for every terrain other than
 `WongSnow` with the thesis's front-region distribution (that case has its own,
-specialised quadrature in `_contact.py`).
+specialised quadrature in `contact.py`).
 
 The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
 sinkage, shear stress by Janosi–Hanamoto from the shear displacement 4.10) are

@@ -1,0 +1,91 @@
+"""The package layout rules of CONTRIBUTING.md, checked on the source.
+
+- nothing inside snowjax/ imports from the package's top level (`snowjax/__init__.py` is the
+  public surface only);
+- each concept package imports only the layers below it;
+- no module is longer than 800 lines unless its docstring says why.
+"""
+
+import ast
+import pathlib
+import re
+
+PKG = pathlib.Path(__file__).resolve().parents[1] / "snowjax"
+
+# What each part may import (besides itself).
+ALLOWED = {
+    "_leaves": set(),
+    "_constants": set(),
+    "_terrain": {"_leaves", "_constants"},
+    "_wheel": {"_leaves", "_constants", "_terrain"},
+    "_tire": {"_leaves", "_constants"},
+    "_empirical": {"_leaves", "_constants", "_terrain", "_wheel"},
+}
+WORKFLOWS = {"_fit", "_sweep", "_sim", "_validate", "_reproduce"}
+MODELS = {"_leaves", "_constants", "_terrain", "_wheel", "_tire", "_empirical"}
+for name in WORKFLOWS:
+    ALLOWED[name] = MODELS | WORKFLOWS
+ALLOWED["_cli"] = MODELS | WORKFLOWS
+
+
+def _modules():
+    return sorted(p for p in PKG.rglob("*.py") if p.name != "__init__.py" or p.parent != PKG)
+
+
+def _imports(path):
+    """(line, absolute module) of every snowjax import in `path`."""
+    rel = path.relative_to(PKG.parent).with_suffix("")
+    package = list(rel.parts[:-1])
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] == "snowjax":
+                    yield node.lineno, a.name
+        elif isinstance(node, ast.ImportFrom):
+            if node.level == 0:
+                if (node.module or "").split(".")[0] == "snowjax":
+                    yield node.lineno, node.module
+                continue
+            base = package[: len(package) - (node.level - 1)]
+            if node.module:
+                yield node.lineno, ".".join([*base, node.module])
+            else:
+                for a in node.names:
+                    yield node.lineno, ".".join([*base, a.name])
+
+
+def test_modules_found():
+    assert len(_modules()) > 30
+
+
+def test_nothing_imports_the_top_level():
+    bad = [
+        f"{p.relative_to(PKG.parent)}:{line} imports {mod}"
+        for p in _modules()
+        for line, mod in _imports(p)
+        if mod == "snowjax"
+    ]
+    assert not bad, "\n".join(bad)
+
+
+def test_layers():
+    bad = []
+    for p in _modules():
+        part = p.relative_to(PKG).parts[0].removesuffix(".py")
+        for line, mod in _imports(p):
+            if mod == "snowjax":  # reported by test_nothing_imports_the_top_level
+                continue
+            target = mod.split(".")[1]
+            if target != part and target not in ALLOWED[part]:
+                bad.append(f"{p.relative_to(PKG.parent)}:{line}: {part} may not import {mod}")
+    assert not bad, "\n".join(bad)
+
+
+def test_module_length():
+    long = []
+    for p in _modules():
+        n = len(p.read_text().splitlines())
+        doc = ast.get_docstring(ast.parse(p.read_text())) or ""
+        if n > 800 and not re.search(r"over 800 lines", doc):
+            long.append(f"{p.relative_to(PKG.parent)}: {n} lines")
+    assert not long, "\n".join(long)
