@@ -89,3 +89,42 @@ def test_module_length():
         if n > 800 and not re.search(r"over 800 lines", doc):
             long.append(f"{p.relative_to(PKG.parent)}: {n} lines")
     assert not long, "\n".join(long)
+
+
+def test_a_new_terrain_law_is_one_class():
+    """A law defined outside the package (one Terrain subclass) runs through solve_wheel.
+
+    A linear law sigma = k z is Bekker's with n = 1, k_c = 0: both must give the same
+    equilibrium, front region and Wong-Reece, batched.
+    """
+    import equinox as eqx
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    import snowjax as sj  # float64: tests/conftest.py
+
+    class LinearSoil(sj.Terrain):
+        modulus: jax.Array = eqx.field(converter=jnp.asarray)
+        cohesion: jax.Array = eqx.field(converter=jnp.asarray)
+        tan_phi: jax.Array = eqx.field(converter=jnp.asarray)
+        shear_modulus: jax.Array = eqx.field(converter=jnp.asarray)
+
+        def pressure(self, sinkage, width):
+            return self.modulus * jnp.maximum(jnp.asarray(sinkage), 0.0)
+
+        @classmethod
+        def reference(cls):
+            return cls(2e6, 1e3, 0.4, 0.01)
+
+    wheel = sj.RigidWheel(1.0, 0.4)
+    mine = LinearSoil(2e6, 1e3, 0.4, 0.01)
+    bekker = sj.BekkerSoil(n=1.0, k_c=0.0, k_phi=2e6, cohesion=1e3, tan_phi=0.4,
+                           shear_modulus=0.01)  # fmt: skip
+    load, slip = np.array([2e3, 4e3, 6e3]), np.array([0.1, 0.3, 0.5])
+    for dist in (None, sj.WongReece(0.43, 0.32)):
+        a = sj.solve_wheel(wheel, mine, load, slip, distribution=dist)
+        b = sj.solve_wheel(wheel, bekker, load, slip, distribution=dist)
+        assert np.all(np.asarray(a.status) == 0)
+        np.testing.assert_allclose(a.sinkage, b.sinkage, rtol=1e-12)
+        np.testing.assert_allclose(a.drawbar_pull, b.drawbar_pull, rtol=1e-10)

@@ -207,7 +207,7 @@ def test_equilibrium_matches_brentq(kind, wong_reece):
 
 
 def test_done_means_batched_loads_slips_parameter_sets():
-    """The issue's call, batched over parameter sets x loads x slips, for every terrain."""
+    """The documented call, batched over parameter sets x loads x slips, for every terrain."""
     wheel = sj.RigidWheel(1.0, 0.4)
     loads = np.array([1000.0, 2000.0, 3000.0])[:, None]
     slips = np.array([-0.2, 0.1, 0.3, 0.6])[None, :]

@@ -18,7 +18,7 @@ from snowjax._validate.validate import _loo_from_grid
 def test_shipped_data_as_printed():
     t = sj.shoop_2001_table11(include_uncertain=True)
     assert len(t["row"]) == 28 and int(t["certain"].sum()) == 26
-    # rows quoted in the issue, in the order of Table 11
+    # the first rows of Table 11 as printed, in its order
     first = np.column_stack(
         [t["snow_depth_m"], t["sinkage_m"], t["resistance_coefficient"], t["density_kg_m3"]]
     )

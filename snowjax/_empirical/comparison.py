@@ -23,10 +23,6 @@ from .traction import (
     brixius,
 )
 
-# ----------------------------------------------------------------------------------------
-# comparison of every motion-resistance model (issue 4, part 6)
-# ----------------------------------------------------------------------------------------
-
 # Default sigma_i for the comparison: the compaction law p = sigma_i exp(-lambda r^2) with
 # lambda = 1 reaches rho_f = 500 kg/m^3 at 210 kPa — CRREL's final-density rule for tyres
 # with a peak contact pressure up to 210 kPa (Richmond 1995, CRREL Report 95-7).
