@@ -9,13 +9,13 @@ STAMP  := $(VENV)/.installed-stamp
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -e '.[test,docs]'
 	touch $(STAMP)
 
 reproduce: $(STAMP)
 	$(BIN)/snowjax reproduce $(ARGS)
 
-LINTED := snowjax tests benchmarks notebooks
+LINTED := snowjax tests benchmarks notebooks docs
 
 # Lint, format and type checks first (seconds), then the suite on two workers: XLA:CPU runs
 # each compiled solve on one thread.

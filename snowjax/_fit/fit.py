@@ -71,7 +71,7 @@ from .._tire.tire import (
 )
 from .._wheel.distribution import WongReece
 from .._wheel.equilibrium import Status, _check_model, solve_wheel
-from .._wheel.equilibrium import _checks as _wheel_checks
+from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.geometry import RigidWheel
 
 __all__ = [

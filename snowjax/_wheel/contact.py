@@ -510,7 +510,7 @@ def contact_forces(
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
-    from .equilibrium import _check_model, _is_thesis_path
+    from .inputs import _check_model, _is_thesis_path
 
     _check_model(wheel, snow, distribution, shear)
     if _is_thesis_path(snow, distribution):

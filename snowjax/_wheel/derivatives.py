@@ -158,7 +158,8 @@ def contact_angle_at_pressure(
     `cos θ = cos θ0 + 2 (z_w / D)(1 - Z)`, written as
     `sin²(θ/2) = sin²(θ0/2) - (z_w/D)(1 - Z)` for accuracy near θ = 0.
 
-    **Arguments:** `sigma_bar` σ̄ in [0, σ̄_n0] [-]; `constants` (default Table 4.1).
+    **Arguments:** `sigma_bar` σ̄ (dimensionless), 0 <= σ̄ <= σ̄_n0; `constants` (default
+    Table 4.1).
     **Returns:** θ [rad] (NaN beyond σ̄_n0, where no rim point has that pressure).
     """
     k = _constants(constants)

@@ -29,14 +29,11 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._terrain.layered import LayeredSnow
-from .._terrain.wong import WongSnow
 from .contact import (
     ShearModel,
     _broadcast_leaves,
-    _check_shear,
     _contact_scalar,
     _layout,
     _nodes_for,
@@ -47,6 +44,15 @@ from .contact import (
 from .distribution import WongReece
 from .general import _general_nodes_for, general_contact
 from .geometry import RigidWheel
+from .inputs import (
+    _broadcast_shape,
+    _check_model,
+    _check_options,
+    _is_thesis_path,
+    _numeric_argument,
+    _valid_mask,
+    _validate_eagerly,
+)
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -97,78 +103,6 @@ class WheelState(eqx.Module):
     drawbar_pull: Float[Array, "..."]
     torque: Float[Array, "..."]
     status: Int[Array, "..."]
-
-
-# ---------------------------------------------------------------------------------------
-# Input validation
-# ---------------------------------------------------------------------------------------
-
-
-def _checks(wheel, terrain, distribution, load, slip, shear):
-    """Every validity rule: (name, value, ok mask, description of the allowed range).
-
-    Works on NumPy values (eager errors) and on traced, flattened batches (status): the
-    rules use only arithmetic and comparisons.
-    """
-    rules = [
-        ("load", load, load > 0, "> 0 N"),
-        ("slip", slip, (slip >= -1) & (slip <= 1), "in [-1, 1]"),
-        ("wheel.diameter", wheel.diameter, wheel.diameter > 0, "> 0 m"),
-        ("wheel.width", wheel.width, wheel.width > 0, "> 0 m"),
-    ]
-    # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
-    # every eager call.
-    kind = type(terrain)
-    rules += [
-        (f"{terrain.label}.{name}", value, ok, allowed)
-        for name, value, ok, allowed in kind.constraints(terrain, shear)
-        + kind.wheel_constraints(terrain, wheel.width)
-    ]
-    if distribution is not None:
-        rules += type(distribution).constraints(distribution, slip)
-    return rules
-
-
-def _is_concrete(x) -> bool:
-    return not _is_traced(x)
-
-
-def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
-    """Raise ValueError naming the argument when concrete inputs are out of range.
-
-    Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
-    """
-    to_np = lambda x: np.asarray(x) if _is_concrete(x) else x  # noqa: E731
-    wheel, terrain, distribution, load, slip = jax.tree_util.tree_map(
-        to_np, (wheel, terrain, distribution, load, slip)
-    )
-    with np.errstate(invalid="ignore", over="ignore"):
-        rules = _checks(wheel, terrain, distribution, load, slip, shear)
-    for name, value, ok, allowed in rules:
-        if not (_is_concrete(value) and _is_concrete(ok)):
-            continue
-        if np.ndim(value) == 0 and np.ndim(ok) == 0:  # scalars: no array round trip
-            if bool(ok) and math.isfinite(float(value)):
-                continue
-        arr = np.asarray(value, dtype=float)
-        good = np.isfinite(arr) & np.asarray(ok)
-        if not np.all(good):
-            good = np.broadcast_to(good, np.broadcast_shapes(good.shape, arr.shape))
-            arr = np.broadcast_to(arr, good.shape)
-            bad = np.argwhere(~good)
-            where = f" at index {tuple(int(k) for k in bad[0])}" if arr.ndim else ""
-            first = arr[tuple(bad[0])] if arr.ndim else arr
-            raise ValueError(
-                f"solve_wheel: {name} must be finite and {allowed}; got {first!r}{where}"
-                f" ({len(bad)} invalid element(s))."
-            )
-
-
-def _valid_mask(wheel, terrain, distribution, load, slip, shear):
-    valid = jnp.ones(load.shape, bool)
-    for _, value, ok, _ in _checks(wheel, terrain, distribution, load, slip, shear):
-        valid &= jnp.isfinite(value) & ok
-    return valid
 
 
 # ---------------------------------------------------------------------------------------
@@ -613,33 +547,6 @@ def _solve_general_jit(
     )
 
 
-def _check_model(wheel, terrain, distribution, shear) -> None:
-    """Type checks and the refused terrain / distribution / shear combinations."""
-    _check_shear(shear)
-    if not isinstance(wheel, RigidWheel):
-        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
-    if not isinstance(terrain, Terrain):
-        raise TypeError(
-            "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
-            f"LayeredSnow), got {type(terrain).__name__}"
-        )
-    if distribution is not None and not isinstance(distribution, WongReece):
-        raise TypeError(
-            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
-        )
-    if shear == "simplified" and (distribution is not None or not isinstance(terrain, WongSnow)):
-        raise ValueError(
-            "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
-            "of the contact: it needs a WongSnow terrain and distribution=None; use "
-            "shear='classic' for other terrains and for the Wong–Reece distribution."
-        )
-
-
-def _is_thesis_path(terrain, distribution) -> bool:
-    """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
-    return distribution is None and isinstance(terrain, WongSnow)
-
-
 def solve_wheel(
     wheel: RigidWheel,
     terrain: Terrain,
@@ -703,13 +610,15 @@ def solve_wheel(
     **Errors and status.**  With concrete inputs, a non-finite or out-of-range value
     raises `ValueError` naming it (`load`, `slip`, `wheel.width`, `snow.p_w`,
     `terrain.n`, `terrain.k_c / b + k_phi`, `snow.bottom.z_w`,
-    `distribution.c1 + c2 * slip`, ...); a wrong type raises `TypeError`, a refused
-    terrain / distribution / shear combination `ValueError`.  Under `jax.jit`/`jax.vmap`
-    invalid elements get `Status.INVALID_INPUT` and NaN fields instead, and the rest of
-    the batch is solved normally.  A load beyond the capacity of a snow layer gives
-    `Status.BOTTOMED_OUT` with `sinkage = depth`; one needing theta0 > 85 degrees
-    (always possible on an infinitely deep terrain) `Status.ENTRY_ANGLE_LIMIT`, with the
-    forces at 85 degrees; never NaN.
+    `distribution.c1 + c2 * slip`, ...); a wrong type raises `TypeError` (lists and
+    Python scalars are accepted; None, strings, booleans and complex numbers are not),
+    shapes that do not broadcast raise `ValueError` naming them, and an empty batch
+    returns empty fields.  A refused terrain / distribution / shear combination raises
+    `ValueError`.  Under `jax.jit`/`jax.vmap` invalid elements get `Status.INVALID_INPUT`
+    and NaN fields instead, and the rest of the batch is solved normally.  A load beyond
+    the capacity of a snow layer gives `Status.BOTTOMED_OUT` with `sinkage = depth`; one
+    needing theta0 > 85 degrees (always possible on an infinitely deep terrain)
+    `Status.ENTRY_ANGLE_LIMIT`, with the forces at 85 degrees; never NaN.
 
     **Documented range** (tested), `WongSnow` front region: p_w 5-200 kPa, z_w 5-35 cm
     and below 0.45 D, cohesion 0.1-20 kPa, tan phi 0.02-0.8, shear modulus 2-80 mm,
@@ -718,6 +627,16 @@ def solve_wheel(
     distributions".
     """
     _check_model(wheel, terrain, distribution, shear)
+    _check_options(nodes_per_panel, max_steps)
+    load = _numeric_argument("load", load)
+    slip = _numeric_argument("slip", slip)
+    if initial_entry_angle is not None:
+        initial_entry_angle = _numeric_argument("initial_entry_angle", initial_entry_angle)
+    shape = _broadcast_shape(wheel, terrain, distribution, load, slip, initial_entry_angle)
+    if math.prod(shape) == 0:  # an empty batch: empty results, nothing to solve
+        dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
+        empty = jnp.zeros(shape, dtype)
+        return WheelState(empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32))
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
     if _is_thesis_path(terrain, distribution):
         n = _nodes_for(shear, nodes_per_panel)

@@ -1,0 +1,173 @@
+"""Input checks of the wheel solver: eager errors naming the argument (concrete inputs) and
+the per-element validity mask (traced inputs, `Status.INVALID_INPUT`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from .._leaves import _is_traced, _module_leaves
+from .._terrain.base import Terrain
+from .._terrain.wong import WongSnow
+from .contact import _check_shear
+from .distribution import WongReece
+from .geometry import RigidWheel
+
+# ---------------------------------------------------------------------------------------
+# Input validation
+# ---------------------------------------------------------------------------------------
+
+
+def _checks(wheel, terrain, distribution, load, slip, shear):
+    """Every validity rule: (name, value, ok mask, description of the allowed range).
+
+    Works on NumPy values (eager errors) and on traced, flattened batches (status): the
+    rules use only arithmetic and comparisons.
+    """
+    rules = [
+        ("load", load, load > 0, "> 0 N"),
+        ("slip", slip, (slip >= -1) & (slip <= 1), "in [-1, 1]"),
+        ("wheel.diameter", wheel.diameter, wheel.diameter > 0, "> 0 m"),
+        ("wheel.width", wheel.width, wheel.width > 0, "> 0 m"),
+    ]
+    # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
+    # every eager call.
+    kind = type(terrain)
+    rules += [
+        (f"{terrain.label}.{name}", value, ok, allowed)
+        for name, value, ok, allowed in kind.constraints(terrain, shear)
+        + kind.wheel_constraints(terrain, wheel.width)
+    ]
+    if distribution is not None:
+        rules += type(distribution).constraints(distribution, slip)
+    return rules
+
+
+def _is_concrete(x) -> bool:
+    return not _is_traced(x)
+
+
+def _numeric_argument(name: str, value):
+    """`value` as an array if it is concrete (lists and scalars accepted), else unchanged.
+
+    Raises TypeError naming the argument for None, strings, booleans and complex numbers:
+    a load of `True` is not 1 N.
+    """
+    if _is_traced(value) or isinstance(value, jax.Array):
+        arr = value
+    else:
+        try:
+            arr = np.asarray(value)
+        except (TypeError, ValueError) as err:  # ragged nested lists
+            raise TypeError(f"solve_wheel: {name} must be a real number or array: {err}") from None
+    kind = np.dtype(arr.dtype).kind
+    if kind not in "iuf":
+        kinds = {"b": "a boolean", "c": "a complex number", "U": "a string", "S": "bytes"}
+        what = "None" if value is None else kinds.get(kind, type(value).__name__)
+        raise TypeError(f"solve_wheel: {name} must be a real number or array, got {what}")
+    return value if _is_traced(value) or isinstance(value, jax.Array) else arr
+
+
+def _broadcast_shape(wheel, terrain, distribution, load, slip, guess) -> tuple[int, ...]:
+    """The broadcast shape of every input, or ValueError naming the shapes that clash."""
+    leaves = jax.tree_util.tree_leaves((wheel, terrain, distribution, load, slip, guess))
+    try:
+        return tuple(np.broadcast_shapes(*(np.shape(x) for x in leaves)))
+    except ValueError:
+        pass
+    named = {"load": load, "slip": slip}
+    if guess is not None:
+        named["initial_entry_angle"] = guess
+    for label, tree in (("wheel", wheel), (terrain.label, terrain), ("distribution", distribution)):
+        if tree is not None:
+            for path, leaf in _module_leaves(tree).items():
+                named[f"{label}.{path}"] = leaf
+    shapes = {k: tuple(np.shape(v)) for k, v in named.items()}
+    try:
+        return tuple(np.broadcast_shapes(*shapes.values()))
+    except ValueError:
+        shown = ", ".join(f"{k} {v}" for k, v in shapes.items() if v)
+        raise ValueError(
+            f"solve_wheel: the input shapes do not broadcast together (NumPy rules): {shown}"
+        ) from None
+
+
+def _check_options(nodes_per_panel, max_steps) -> None:
+    def integer(x):
+        return isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
+
+    if nodes_per_panel is not None and not (integer(nodes_per_panel) and nodes_per_panel >= 1):
+        raise TypeError(
+            f"solve_wheel: nodes_per_panel must be None or an integer >= 1, got {nodes_per_panel!r}"
+        )
+    if not (integer(max_steps) and max_steps >= 1):
+        raise ValueError(f"solve_wheel: max_steps must be an integer >= 1, got {max_steps!r}")
+
+
+def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
+    """Raise ValueError naming the argument when concrete inputs are out of range.
+
+    Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
+    """
+    to_np = lambda x: np.asarray(x) if _is_concrete(x) else x  # noqa: E731
+    wheel, terrain, distribution, load, slip = jax.tree_util.tree_map(
+        to_np, (wheel, terrain, distribution, load, slip)
+    )
+    with np.errstate(invalid="ignore", over="ignore"):
+        rules = _checks(wheel, terrain, distribution, load, slip, shear)
+    for name, value, ok, allowed in rules:
+        if not (_is_concrete(value) and _is_concrete(ok)):
+            continue
+        if np.ndim(value) == 0 and np.ndim(ok) == 0:  # scalars: no array round trip
+            if bool(ok) and math.isfinite(float(value)):
+                continue
+        arr = np.asarray(value, dtype=float)
+        good = np.isfinite(arr) & np.asarray(ok)
+        if not np.all(good):
+            good = np.broadcast_to(good, np.broadcast_shapes(good.shape, arr.shape))
+            arr = np.broadcast_to(arr, good.shape)
+            bad = np.argwhere(~good)
+            where = f" at index {tuple(int(k) for k in bad[0])}" if arr.ndim else ""
+            first = arr[tuple(bad[0])] if arr.ndim else arr
+            raise ValueError(
+                f"solve_wheel: {name} must be finite and {allowed}; got {first!r}{where}"
+                f" ({len(bad)} invalid element(s))."
+            )
+
+
+def _valid_mask(wheel, terrain, distribution, load, slip, shear):
+    valid = jnp.ones(load.shape, bool)
+    for _, value, ok, _ in _checks(wheel, terrain, distribution, load, slip, shear):
+        valid &= jnp.isfinite(value) & ok
+    return valid
+
+
+def _check_model(wheel, terrain, distribution, shear) -> None:
+    """Type checks and the refused terrain / distribution / shear combinations."""
+    _check_shear(shear)
+    if not isinstance(wheel, RigidWheel):
+        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+    if not isinstance(terrain, Terrain):
+        raise TypeError(
+            "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
+            f"LayeredSnow), got {type(terrain).__name__}"
+        )
+    if distribution is not None and not isinstance(distribution, WongReece):
+        raise TypeError(
+            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+        )
+    if shear == "simplified" and (distribution is not None or not isinstance(terrain, WongSnow)):
+        raise ValueError(
+            "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
+            "of the contact: it needs a WongSnow terrain and distribution=None; use "
+            "shear='classic' for other terrains and for the Wong–Reece distribution."
+        )
+
+
+def _is_thesis_path(terrain, distribution) -> bool:
+    """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
+    return distribution is None and isinstance(terrain, WongSnow)

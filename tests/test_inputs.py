@@ -1,0 +1,68 @@
+"""Every wrong argument to solve_wheel is a clear, eager error naming the argument.
+
+Ordinary inputs that are not arrays (lists, Python scalars) are accepted; an empty batch
+gives empty results.
+"""
+
+import re
+
+import jax
+import numpy as np
+import pytest
+
+import snowjax as sj
+
+WHEEL = sj.RigidWheel.thesis_tire()
+SNOW = sj.WongSnow.thesis_fresh_snow()
+
+
+def test_a_list_is_an_array():
+    listed = sj.solve_wheel(WHEEL, SNOW, [3500.0, 5000.0], 0.3)
+    arrayed = sj.solve_wheel(WHEEL, SNOW, np.array([3500.0, 5000.0]), 0.3)
+    np.testing.assert_array_equal(listed.sinkage, arrayed.sinkage)
+    assert np.all(np.asarray(listed.status) == 0)
+
+
+def test_an_empty_batch_gives_empty_results():
+    st = sj.solve_wheel(WHEEL, SNOW, np.zeros((0, 3)), 0.3)
+    assert st.sinkage.shape == (0, 3) and st.status.shape == (0, 3)
+    assert st.status.dtype == np.int32
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "error", "message"),
+    [
+        ({"load": np.full(3, 4e3), "slip": np.full(4, 0.3)}, ValueError,
+         "input shapes do not broadcast together (NumPy rules): load (3,), slip (4,)"),
+        ({"load": "5000"}, TypeError, "load must be a real number or array, got a string"),
+        ({"slip": "0.3"}, TypeError, "slip must be a real number or array, got a string"),
+        ({"load": 5000 + 1j}, TypeError, "load must be a real number or array, got a complex"),
+        ({"load": True}, TypeError, "load must be a real number or array, got a boolean"),
+        ({"slip": np.array([True])}, TypeError, "slip must be a real number or array, got a bool"),
+        ({"load": None}, TypeError, "load must be a real number or array, got None"),
+        ({"load": [[1e3, 2e3], [3e3]]}, TypeError, "load must be a real number or array"),
+        ({"nodes_per_panel": 2.5}, TypeError, "nodes_per_panel must be None or an integer >= 1"),
+        ({"nodes_per_panel": 0}, TypeError, "nodes_per_panel must be None or an integer"),
+        ({"max_steps": -1}, ValueError, "max_steps must be an integer >= 1, got -1"),
+        ({"max_steps": 3.5}, ValueError, "max_steps must be an integer >= 1, got 3.5"),
+        ({"initial_entry_angle": "x"}, TypeError, "initial_entry_angle must be a real number"),
+    ],
+)  # fmt: skip
+def test_bad_arguments_are_named(kwargs, error, message):
+    args = {"load": 5000.0, "slip": 0.3} | kwargs
+    load, slip = args.pop("load"), args.pop("slip")
+    with pytest.raises(error, match=re.escape(message)):
+        sj.solve_wheel(WHEEL, SNOW, load, slip, **args)
+
+
+def test_a_parameter_shape_clash_names_the_leaf():
+    snow = sj.WongSnow(np.full(2, 85e3), 0.2, 18e3, 0.08, 0.01)
+    with pytest.raises(ValueError, match=re.escape("snow.p_w (2,)")):
+        sj.solve_wheel(WHEEL, snow, np.full(3, 4e3), 0.3)
+
+
+def test_traced_inputs_still_work():
+    f = jax.jit(lambda load: sj.solve_wheel(WHEEL, SNOW, load, 0.3).sinkage)
+    np.testing.assert_allclose(
+        f(np.array([4e3, 5e3])), sj.solve_wheel(WHEEL, SNOW, [4e3, 5e3], 0.3).sinkage, rtol=1e-12
+    )
