@@ -8,11 +8,32 @@ arguments (it returns the exit code).  Modules import JAX lazily so `--help` is 
 from __future__ import annotations
 
 import argparse
+import re
 import sys
 
 from . import fit, reproduce, sweep, validate
 
 _SUBCOMMANDS = (reproduce, fit, sweep, validate)
+
+
+_NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)")
+
+
+def _attach_negative_values(argv: list[str]) -> list[str]:
+    """`--slips -0.5:0:3` -> `--slips=-0.5:0:3`.
+
+    argparse takes a token starting with `-` for an option unless it is a plain negative
+    number, so a value such as `-0.5:0:3` after `--slips` would be refused.  No snowjax
+    option name starts with a digit, so a `-<digit>` token after a `--long` option is
+    always that option's value.
+    """
+    out: list[str] = []
+    for tok in argv:
+        if out and out[-1].startswith("--") and "=" not in out[-1] and _NEGATIVE_VALUE.match(tok):
+            out[-1] = f"{out[-1]}={tok}"
+        else:
+            out.append(tok)
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -23,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     sub = parser.add_subparsers(dest="command", required=True)
     for module in _SUBCOMMANDS:
         module.register(sub)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(_attach_negative_values(sys.argv[1:] if argv is None else argv))
     return int(args.run(args))
 
 

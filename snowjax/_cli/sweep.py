@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import itertools
+import pathlib
 import sys
 
 _PARAMETERS = (
@@ -157,6 +158,14 @@ def register(sub) -> None:
     p.set_defaults(run=run)
 
 
+# At most this many values per list: 10^8 float64 values are 0.75 GiB before any solving.
+MAX_VALUES = 10**8
+
+
+def _gib(n_bytes: float) -> str:
+    return f"{n_bytes / 2**30:,.1f} GiB"
+
+
 def _values(text: str, option: str):
     """`start:stop:num`, a comma list or one number -> 1-D float array."""
     import numpy as np
@@ -170,6 +179,8 @@ def _values(text: str, option: str):
             start, stop, num = float(parts[0]), float(parts[1]), parts[2]
             if not num.strip().isdigit() or int(num) < 1:
                 raise ValueError
+            if int(num) > MAX_VALUES:
+                raise OverflowError(int(num))
             return np.linspace(start, stop, int(num))
         values = [float(v) for v in text.split(",")]
     except ValueError:
@@ -177,7 +188,32 @@ def _values(text: str, option: str):
             f"--{option} {text!r}: expected start:stop:num (num a positive integer), a comma"
             " list of numbers, or one number"
         ) from None
+    except OverflowError as err:
+        n = err.args[0]
+        raise ValueError(
+            f"--{option} {text!r}: {n:,} values would take {_gib(8 * n)} before solving;"
+            f" at most {MAX_VALUES:,} per list"
+        ) from None
     return np.asarray(values)
+
+
+def _check_output_size(out: str, n_points: int, formats) -> None:
+    """Refuse a sweep whose files cannot fit on the disk that holds `out`."""
+    import shutil
+
+    # Per row: chunk files plus each consolidated output, ~16 float64 columns each (npz)
+    # or ~16 columns of ~20 characters (csv).
+    per_row = 16 * 8 + sum(16 * (8 if f == "npz" else 20) for f in formats)
+    need = n_points * per_row
+    where = pathlib.Path(out).resolve()
+    while not where.exists():
+        where = where.parent
+    free = shutil.disk_usage(where).free
+    if need > free:
+        raise ValueError(
+            f"{n_points:,} points would write about {_gib(need)} of files; {_gib(free)} free"
+            f" at {where}"
+        )
 
 
 def _build(args):
@@ -342,7 +378,10 @@ def run(args) -> int:
     try:
         if args.chunk_size < 1:
             raise ValueError(f"--chunk-size must be a positive integer, got {args.chunk_size}")
+        if not args.out.strip():
+            raise ValueError("--out must name a directory, got ''")
         import jax
+        import numpy as np
 
         jax.config.update("jax_enable_x64", not args.float32)
         if args.distributed:
@@ -354,6 +393,9 @@ def run(args) -> int:
         from .._sweep.sweep import sweep
 
         wheel, snow, distribution, loads, slips, formats = _build(args)
+        n_sets = max([1, *(np.size(x) for x in jax.tree_util.tree_leaves((wheel, snow)))])
+        n_points = len(loads) if args.list else len(loads) * len(slips) * n_sets
+        _check_output_size(args.out, n_points, formats)
         result = sweep(
             wheel,
             snow,
