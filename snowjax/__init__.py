@@ -82,13 +82,13 @@ from ._empirical.models import van_es_compaction_resistance as van_es_compaction
 from ._empirical.models import van_es_rolling_resistance as van_es_rolling_resistance
 
 # --- calibration ---
-from ._fit.fit import FitResult as FitResult
-from ._fit.fit import fit_parameter_names as fit_parameter_names
-from ._fit.fit import fit_plate_sinkage as fit_plate_sinkage
-from ._fit.fit import fit_tire_coefficients as fit_tire_coefficients
-from ._fit.fit import fit_wheel as fit_wheel
-from ._fit.fit import thesis_plate_test as thesis_plate_test
-from ._fit.fit import thesis_tire_table as thesis_tire_table
+from ._fit.core import FitResult as FitResult
+from ._fit.wheel import fit_parameter_names as fit_parameter_names
+from ._fit.plate import fit_plate_sinkage as fit_plate_sinkage
+from ._fit.tire import fit_tire_coefficients as fit_tire_coefficients
+from ._fit.wheel import fit_wheel as fit_wheel
+from ._fit.plate import thesis_plate_test as thesis_plate_test
+from ._fit.tire import thesis_tire_table as thesis_tire_table
 
 # --- vehicle simulation ---
 from ._sim.simulation import TorqueProfile as TorqueProfile
@@ -106,7 +106,7 @@ from ._sweep.storage import load_sweep as load_sweep
 from ._sweep.sweep import sweep as sweep
 
 # --- reproduction of the thesis; closed-form derivatives of chapter 4 ---
-from ._reproduce.reproduce import reproduce as reproduce
+from ._reproduce.registry import reproduce as reproduce
 from ._wheel.derivatives import DimensionlessConstants as DimensionlessConstants
 from ._wheel.derivatives import ShearDerivatives as ShearDerivatives
 from ._wheel.derivatives import shear_derivatives as shear_derivatives

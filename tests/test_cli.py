@@ -10,7 +10,7 @@ import pathlib
 import pytest
 
 from snowjax._cli.app import main
-from snowjax._reproduce import reproduce as _reproduce
+from snowjax._reproduce import registry as _reproduce
 
 
 def _stub(missing=()):

@@ -12,12 +12,18 @@ CASES = [
      "1,000,000,000,000 points would write about"),
     (["sweep", "--out", ""], "--out must name a directory"),
     (["sweep", "--slips", "0:1:x", "--out", "{tmp}/s"], "--slips '0:1:x': expected start:stop:num"),
+    (["reproduce", "--out", "{tmp}/file"], "--out {tmp}/file: exists and is not a directory"),
+    (["reproduce", "--out", "{tmp}/file/sub"], "--out {tmp}/file/sub: cannot create the directory"),
+    (["reproduce", "--out", "/proc/snowjax"], "--out /proc/snowjax: cannot create the directory"),
+    (["reproduce", "--out", ""], "--out must name a directory"),
 ]  # fmt: skip
 
 
 @pytest.mark.parametrize(("argv", "message"), CASES)
 def test_expected_failures_are_one_line(argv, message, tmp_path, capsys):
+    (tmp_path / "file").write_text("not a directory")
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
+    message = message.replace("{tmp}", str(tmp_path))
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert message in err

@@ -1,4 +1,4 @@
-"""Calibration (issue 5): plate-sinkage fits, tire load functions, wheel calibration, CLI.
+"""Calibration: plate-sinkage fits, tire load functions, wheel calibration, CLI.
 
 Every expected number here comes from outside the code under test: the thesis text
 (Sankapalli 2004, Tables 2.1 and 3.2 and the coefficients printed beside them),
@@ -23,7 +23,7 @@ from scipy.optimize import curve_fit
 
 import snowjax as sj
 from snowjax._cli import app as _cli
-from snowjax._fit import fit as _fit
+from snowjax._fit import wheel as _fit
 from tests.notebook_runner import outputs_text, run_notebook
 
 TIGHT = dict(ftol=1e-15, xtol=1e-15, gtol=1e-15, maxfev=100_000)
@@ -555,16 +555,43 @@ def test_cli_fit_wheel(round_trip, tmp_path, capsys):
 
 
 MALFORMED = {
-    "missing_column": ("sinkage_m,plate_size_m\n0.1,0.2\n", "line 1 (header): missing column(s) 'pressure_Pa or pressure_kPa'"),
-    "text_in_number": ("sinkage_m,pressure_Pa,plate_size_m\n0.1,1000,0.2\n0.2,abc,0.2\n", "line 3 (data row 2), column 'pressure_Pa': 'abc' is not a number"),
-    "empty_file": ("", "the file is empty"),
-    "only_comments": ("# nothing here\n\n", "the file is empty"),
-    "nan": ("sinkage_m,pressure_Pa,plate_size_m\n0.1,1000,0.2\n0.2,nan,0.2\n", "line 3 (data row 2), column 'pressure_Pa': 'nan' is not a finite number"),
-    "short_row": ("sinkage_m,pressure_Pa,plate_size_m\n0.1,1000\n", "line 2 (data row 1): expected 3 fields, got 2"),
-    "no_rows": ("sinkage_m,pressure_Pa,plate_size_m\n", "no data rows"),
-    "out_of_range": ("sinkage_m,pressure_Pa,plate_size_m\n-0.1,1000,0.2\n", "column 'sinkage_m': -0.1 is out of range"),
-    "empty_cell": ("sinkage_m,pressure_Pa,plate_size_m\n0.1,,0.2\n", "column 'pressure_Pa': empty value"),
-}  # fmt: skip
+    "missing_column": (
+        "sinkage_m,plate_size_m\n0.1,0.2\n",
+        "line 1 (header): missing column(s) 'pressure_Pa or pressure_kPa'",
+    ),
+    "text_in_number": (
+        "sinkage_m,pressure_Pa,plate_size_m\n0.1,1000,0.2\n0.2,abc,0.2\n",
+        "line 3 (data row 2), column 'pressure_Pa': 'abc' is not a number",
+    ),
+    "empty_file": (
+        "",
+        "the file is empty",
+    ),
+    "only_comments": (
+        "# nothing here\n\n",
+        "the file is empty",
+    ),
+    "nan": (
+        "sinkage_m,pressure_Pa,plate_size_m\n0.1,1000,0.2\n0.2,nan,0.2\n",
+        "line 3 (data row 2), column 'pressure_Pa': 'nan' is not a finite number",
+    ),
+    "short_row": (
+        "sinkage_m,pressure_Pa,plate_size_m\n0.1,1000\n",
+        "line 2 (data row 1): expected 3 fields, got 2",
+    ),
+    "no_rows": (
+        "sinkage_m,pressure_Pa,plate_size_m\n",
+        "no data rows",
+    ),
+    "out_of_range": (
+        "sinkage_m,pressure_Pa,plate_size_m\n-0.1,1000,0.2\n",
+        "column 'sinkage_m': -0.1 is out of range",
+    ),
+    "empty_cell": (
+        "sinkage_m,pressure_Pa,plate_size_m\n0.1,,0.2\n",
+        "column 'pressure_Pa': empty value",
+    ),
+}
 
 
 @pytest.mark.parametrize("case", sorted(MALFORMED))

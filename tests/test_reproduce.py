@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from snowjax._cli.app import main
-from snowjax._reproduce.reproduce import FIGURES, TABLE_3_2
+from snowjax._reproduce.chapter3 import TABLE_3_2
+from snowjax._reproduce.registry import FIGURES
 from tests import reference
 from tests.notebook_runner import outputs_text, run_notebook
 from tests.test_derivatives import SIGMA_N0, tau_bar_classic_np

@@ -1,4 +1,4 @@
-"""Calibration, sweeps and the vehicle simulation on every terrain (issue 12, point 4).
+"""Calibration, sweeps and the vehicle simulation on every terrain.
 
 Bekker's snow (Wong's Snow (U.S.) set) under the thesis tyre with the Wong–Reece stress
 distribution.  Every `solve_wheel` call here uses leaves broadcast to 12 elements, so the
@@ -19,7 +19,7 @@ import scipy.optimize
 
 import snowjax as sj
 from snowjax._cli.app import main
-from snowjax._fit import fit as _fit
+from snowjax._fit import wheel as _fit
 from snowjax._sweep import sweep as _sweep
 
 WHEEL = sj.RigidWheel.thesis_tire()  # D 0.736 m, b 0.235 m

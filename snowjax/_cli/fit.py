@@ -291,7 +291,9 @@ def run(args) -> int:
     jax.config.update("jax_enable_x64", True)
     import numpy as np
 
-    from .._fit import fit as _fit
+    from .._fit.plate import fit_plate_sinkage
+    from .._fit.tire import fit_tire_coefficients
+    from .._fit.wheel import fit_parameter_names, fit_wheel
     from .._wheel.geometry import RigidWheel
 
     try:
@@ -309,12 +311,12 @@ def run(args) -> int:
                     f"{path}: law {args.law!r} needs the plate size b: add a plate_size_m "
                     "column or pass --plate-size"
                 )
-            result = _fit.fit_plate_sinkage(
+            result = fit_plate_sinkage(
                 np.array(cols["sinkage_m"]), pressure, args.law, size,
                 cohesion=args.cohesion, unit_weight=args.unit_weight,
             )  # fmt: skip
         elif kind == "tire":
-            result = _fit.fit_tire_coefficients(
+            result = fit_tire_coefficients(
                 *(np.array(cols[c]) for c in ("load_kN", "cs", "ca", "mux", "muy", "e1"))
             )
         else:
@@ -322,14 +324,14 @@ def run(args) -> int:
             fit_text = args.fit
             if fit_text is None:
                 if not (args.terrain == "wong" and distribution is None):
-                    names = ", ".join(_fit.fit_parameter_names(snow, distribution))
+                    names = ", ".join(fit_parameter_names(snow, distribution))
                     raise ValueError(f"give --fit: the parameters to fit, among {names}")
                 fit_text = "p_w,z_w,tan_phi"
             names = tuple(s.strip() for s in fit_text.split(",") if s.strip())
             measured: dict[str, Any] = {q: np.array(cols[c]) for q, c in (
                 ("sinkage", "sinkage_m"), ("drawbar_pull", "drawbar_pull_N"),
                 ("motion_resistance", "motion_resistance_N")) if c in cols}  # fmt: skip
-            result = _fit.fit_wheel(
+            result = fit_wheel(
                 RigidWheel(args.diameter, args.width), snow,
                 np.array(cols["load_N"]), np.array(cols["slip"]),
                 fit=names, shear=args.shear, max_steps=args.max_steps,

@@ -1,6 +1,7 @@
 """`snowjax reproduce`: regenerate the thesis's figures and `report.md`.
 
-`snowjax reproduce [--out DIR] [--small]` runs `snowjax.reproduce` (snowjax/_reproduce.py):
+`snowjax reproduce [--out DIR] [--small]` runs `snowjax.reproduce`
+(snowjax/_reproduce/registry.py):
 one PNG and one CSV per reproduced figure of Sankapalli (2004), the wheel sweep
 `wheel_sweep.csv` of Figs 4.7/4.8, `derivative_tables.csv` (Tables 4.3–4.6 against
 autodiff) and `report.md`, which shows every figure with its caption, equations, numbers
@@ -10,7 +11,9 @@ in float64.
 
 from __future__ import annotations
 
+import os
 import pathlib
+import sys
 
 
 def register(sub) -> None:
@@ -23,8 +26,7 @@ def register(sub) -> None:
     )
     rep.add_argument(
         "--out",
-        type=pathlib.Path,
-        default=pathlib.Path("snowjax-output"),
+        default="snowjax-output",
         help="output directory (default: ./snowjax-output)",
     )
     rep.add_argument(
@@ -35,9 +37,31 @@ def register(sub) -> None:
     rep.set_defaults(run=run, parser=rep)
 
 
+def _output_dir(text: str) -> pathlib.Path:
+    """The output directory, created; ValueError naming the problem if it cannot be."""
+    if not text.strip():
+        raise ValueError("--out must name a directory, got ''")
+    out = pathlib.Path(text)
+    if out.exists() and not out.is_dir():
+        raise ValueError(f"--out {text}: exists and is not a directory")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ValueError(f"--out {text}: cannot create the directory ({err.strerror})") from None
+    if not os.access(out, os.W_OK):
+        raise ValueError(f"--out {text}: the directory is not writable")
+    return out
+
+
 def run(args) -> int:
     """Run the reproduction; print a summary table and the path of report.md."""
     import time
+
+    try:
+        args.out = _output_dir(args.out)
+    except ValueError as err:
+        print(f"snowjax reproduce: error: {err}", file=sys.stderr)
+        return 2
 
     import jax
 
@@ -45,7 +69,7 @@ def run(args) -> int:
     from rich.console import Console
     from rich.table import Table
 
-    from .._reproduce.reproduce import FIGURES, reproduce
+    from .._reproduce.registry import FIGURES, reproduce
 
     console = Console()
     start = time.perf_counter()

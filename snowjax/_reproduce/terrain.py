@@ -10,6 +10,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from .._terrain.bekker import BekkerSoil
+from .._terrain.layered import LayeredSnow
+from .._terrain.wong import WongSnow
+from .._wheel.distribution import WongReece
+from .._wheel.equilibrium import solve_wheel
+from .._wheel.geometry import RigidWheel
+from .plotting import status_names, subplots
+from .spec import Context, FigureResult, figure
+
 TERRAIN_LOAD = 1000.0  # [N]: carried by all three terrains with both distributions
 
 TERRAIN_CAPTION = (
@@ -23,23 +32,26 @@ TERRAIN_CAPTION = (
 )
 
 
-def terrain_figure(ctx, figure_result, subplots, status_names):
-    """Draw the figure; the helpers come from `_reproduce` (passed in to avoid a cycle)."""
-    import snowjax as sj
-
+@figure(
+    "T.1",
+    "terrain laws and stress distributions: sinkage and drawbar pull vs slip",
+    TERRAIN_CAPTION,
+    ("2.1", "2.3", "4.5", "4.10", "4.11", "4.14", "Wong–Reece 1967"),
+)
+def fig_terrains(ctx: Context) -> FigureResult:
     slips = np.linspace(-0.4, 0.9, 8 if ctx.small else 27)
-    wheel = sj.RigidWheel.thesis_tire()
+    wheel = RigidWheel.thesis_tire()
     terrains = {
-        "Wong snow (Table 4.1)": sj.WongSnow.thesis_fresh_snow(),
-        "Bekker Snow (U.S.)": sj.BekkerSoil.snow_us(),
-        "layered snow with ice": sj.LayeredSnow.ice_layer_example(),
+        "Wong snow (Table 4.1)": WongSnow.thesis_fresh_snow(),
+        "Bekker Snow (U.S.)": BekkerSoil.snow_us(),
+        "layered snow with ice": LayeredSnow.ice_layer_example(),
     }
-    dists = {"front region": None, "Wong–Reece": sj.WongReece(0.43, 0.32)}
+    dists = {"front region": None, "Wong–Reece": WongReece(0.43, 0.32)}
     fig, (ax_z, ax_dp) = subplots(1, 2, figsize=(11, 4.2))
     rows, statuses, summary = [], set(), {}
     for (name, terrain), color in zip(terrains.items(), ("C0", "C1", "C2")):
         for (dname, dist), style in zip(dists.items(), ("-", "--")):
-            st = sj.solve_wheel(wheel, terrain, TERRAIN_LOAD, slips, distribution=dist)
+            st = solve_wheel(wheel, terrain, TERRAIN_LOAD, slips, distribution=dist)
             z = 100 * np.asarray(st.sinkage)
             dp = np.asarray(st.drawbar_pull)
             statuses |= set(int(s) for s in np.asarray(st.status))
@@ -74,14 +86,15 @@ def terrain_figure(ctx, figure_result, subplots, status_names):
         "Wong–Reece distribution moves the stress peak forward of the axle and unloads the "
         "rear, so the same load needs a larger entry angle (more sinkage); the larger "
         "contact raises both the motion resistance and the thrust, and drawbar pull is "
-        f"lower with Wong–Reece at {lower} of the {3 * len(slips)} (terrain, slip) points. Bekker's Snow (U.S.) is much softer under this narrow tyre than the "
+        f"lower with Wong–Reece at {lower} of the {3 * len(slips)} (terrain, slip) points. "
+        "Bekker's Snow (U.S.) is much softer under this narrow tyre than the "
         "thesis's snow. On the layered snow the ice carries the wheel until it breaks under "
         "the rim; the equilibrium is the shallowest one. Statuses: "
         + ", ".join(sorted(status_names(statuses)))
         + "."
     )
     cols = ["terrain", "distribution", "slip", "sinkage_cm", "drawbar_pull_N", "status"]
-    return figure_result(
+    return FigureResult(
         fig,
         cols,
         rows,

@@ -1,0 +1,586 @@
+"""Wheel calibration through the equilibrium (4.14) on the least-squares core.
+
+`fit_wheel` fits any subset of the parameters of any terrain (`WongSnow`, `BekkerSoil`,
+`ReeceSoil`, `LayeredSnow`) and of the Wong–Reece stress distribution to measured
+sinkage and/or drawbar pull / motion resistance versus slip at one or more loads,
+straight through the vmapped wheel equilibrium `solve_wheel` (eq. 4.14); its gradients
+come from the implicit function theorem (`optimistix.ImplicitAdjoint`), not from
+unrolled iterations.  `fit_parameter_names` lists the names a terrain and distribution
+offer; parameters that are never negative are fitted in log space
+(`LOG_SPACE_PARAMETERS`), the others linearly.
+
+Equation numbers refer to Sankapalli (2004), *Predictive semi-empirical analysis for
+tire/snow interaction*, MSc thesis, University of Alaska Fairbanks.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import cast
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import ArrayLike, Float
+
+from .._leaves import _module_leaves, _parameter_names, _with_leaves
+from .._terrain.base import Terrain
+from .._terrain.wong import WongSnow
+from .._wheel.contact import ShearModel
+from .._wheel.distribution import WongReece
+from .._wheel.equilibrium import Status, solve_wheel
+from .._wheel.geometry import RigidWheel
+from .._wheel.inputs import _check_model
+from .._wheel.inputs import _checks as _wheel_checks
+from .core import FitResult, Transform, estimate, fit_result, least_squares
+from .data import same_length, vector
+
+__all__ = [
+    "fit_wheel",
+    "fit_parameter_names",
+    "WHEEL_PARAMETERS",
+    "WHEEL_QUANTITIES",
+    "LOG_SPACE_PARAMETERS",
+]
+
+WHEEL_PARAMETERS = ("p_w", "z_w", "cohesion", "tan_phi", "shear_modulus")
+WHEEL_QUANTITIES = ("sinkage", "drawbar_pull", "motion_resistance")
+_WHEEL_UNITS = {"p_w": "Pa", "z_w": "m", "cohesion": "Pa", "tan_phi": "-", "shear_modulus": "m"}
+
+# Scaled residual given to data points whose equilibrium failed at the current iterate
+# (constant, zero gradient): it raises the loss, so Levenberg–Marquardt rejects a step
+# into a region where the model cannot be evaluated.
+_FAILED_RESIDUAL = 10.0
+
+# Unit of every known parameter leaf, by field name (the last component of its path).
+_PARAMETER_UNITS = {
+    **_WHEEL_UNITS,
+    "n": "-",
+    "k_c": "N/m^(n+1)",
+    "k_phi": "N/m^(n+2)",
+    "k_c_prime": "-",
+    "k_phi_prime": "-",
+    "unit_weight": "N/m^3",
+    "ice_failure_pressure": "Pa",
+    "c1": "-",
+    "c2": "-",
+    "c3": "-",
+}
+# Leaves that are never negative are fitted in log space (u = ln theta); all others
+# (k_c, k_phi, k_c_prime, k_phi_prime, c1, c2, c3, and any leaf of a user-defined
+# terrain) as theta = start + scale u.
+LOG_SPACE_PARAMETERS = (
+    "p_w", "z_w", "cohesion", "tan_phi", "shear_modulus", "n", "unit_weight",
+    "ice_failure_pressure",
+)  # fmt: skip
+# Scale of a linearly fitted parameter whose start value is 0 (otherwise |start|).
+_LINEAR_SCALES = {
+    "k_c": 1e3,  # N/m^(n+1)
+    "k_phi": 1e5,  # N/m^(n+2)
+    "k_c_prime": 1.0,
+    "k_phi_prime": 1.0,
+    "c1": 0.1,
+    "c2": 0.1,
+    "c3": 0.1,
+}
+
+
+def _field(path: str) -> str:
+    return path.rsplit(".", 1)[-1]
+
+
+def fit_parameter_names(terrain, distribution=None) -> tuple[str, ...]:
+    """The names `fit_wheel` accepts in `fit=` for this terrain and distribution.
+
+    A leaf is named by its field path: the terrain's fields (`p_w`, `k_phi`, `n`, ...),
+    nested ones dotted (`top.p_w`, `bottom.z_w` for `LayeredSnow`), and the
+    distribution's (`c1`, `c2`, `c3` for `WongReece`).  A name that both hold is
+    written `terrain.<path>` / `distribution.<path>`; these prefixed forms are accepted
+    for every leaf.
+
+    **Arguments:** `terrain`: a `snowjax.Terrain`; `distribution`: `None` or a
+    `snowjax.WongReece`.
+
+    **Returns:** the canonical names, terrain first, in field order.
+    """
+    return tuple(_parameter_names(terrain, distribution))
+
+
+# ---------------------------------------------------------------------------------------
+# The model: residual, names, transform
+# ---------------------------------------------------------------------------------------
+
+
+class _WheelResidual(eqx.Module):
+    """Scaled residuals (model − data) / scale of the chosen quantities, quantity-major.
+
+    θ = transform(u): e^u for log-space parameters, θ_start + s u for the others.
+    """
+
+    names: tuple = eqx.field(static=True)
+    quantities: tuple = eqx.field(static=True)
+    shear: ShearModel = eqx.field(static=True)
+    nodes_per_panel: int | None = eqx.field(static=True)
+    solve_max_steps: int = eqx.field(static=True)
+    # (owner, field path) of each fitted variable; owner "terrain" or "distribution".
+    targets: tuple = eqx.field(static=True, default=())
+
+    def __call__(self, u, args):
+        wheel, snow, distribution, load, slip, data, scale, transform = args
+        values = _finite_cotangent(transform(u))
+        new = {"terrain": {}, "distribution": {}}
+        for i, (owner, path) in enumerate(self.targets):
+            new[owner][path] = values[i]
+        snow = _with_leaves(snow, new["terrain"])
+        if distribution is not None:
+            distribution = _with_leaves(distribution, new["distribution"])
+        st = solve_wheel(
+            wheel,
+            snow,
+            load,
+            slip,
+            self.shear,
+            distribution=distribution,
+            nodes_per_panel=self.nodes_per_panel,
+            max_steps=self.solve_max_steps,
+        )
+        pred = jnp.stack([getattr(st, q) for q in self.quantities])
+        return _masked_residual(pred, data, scale, st.status).reshape(-1), (pred, st.status)
+
+
+@jax.custom_vjp
+def _finite_cotangent(x):
+    """Identity whose backward pass replaces non-finite cotangents by 0.
+
+    A derivative the model cannot provide (e.g. w.r.t. z_w once z_w exceeds the wheel
+    diameter, where `solve_wheel`'s base angle arccos(1 − 2 z_w/D) is clipped) then
+    shows up as a zero Jacobian column — "not identifiable" in the diagnostics — instead
+    of a NaN that would stop the Levenberg–Marquardt linear solves.
+    """
+    return x
+
+
+def _finite_cotangent_fwd(x):
+    return x, None
+
+
+def _finite_cotangent_bwd(_, ct):
+    return (jnp.where(jnp.isfinite(ct), ct, 0.0),)
+
+
+_finite_cotangent.defvjp(_finite_cotangent_fwd, _finite_cotangent_bwd)
+
+
+def _masked_residual(pred, data, scale, status):
+    """(pred − data) / scale where the equilibrium is valid; `_FAILED_RESIDUAL` elsewhere.
+
+    `pred`, `data`, `scale`: (quantities, points); `status`: (points,).  Valid means
+    `CONVERGED` or `BOTTOMED_OUT`.  Failed points get a constant (no gradient), and the
+    NaN a failed solve may return never reaches the value or the Jacobian.
+    """
+    ok = ((status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT))[None]
+    safe_pred = jnp.where(ok, pred, data)
+    return jnp.where(ok, (safe_pred - data) / scale, _FAILED_RESIDUAL)
+
+
+def _resolve_fit_names(fit, terrain, distribution):
+    """User names -> (canonical names, (owner, path) targets), or a ValueError."""
+    table = _parameter_names(terrain, distribution)
+    aliases = dict((name, name) for name in table)
+    for name, (owner, path) in table.items():
+        aliases.setdefault(f"{owner}.{path}", name)
+    if isinstance(terrain, WongSnow) and distribution is None:
+        allowed_txt = f"{WHEEL_PARAMETERS}"
+    else:
+        allowed_txt = (
+            f"{tuple(table)} (for {type(terrain).__name__}"
+            + ("" if distribution is None else f" with {type(distribution).__name__}")
+            + "; the prefixed forms 'terrain.<name>' / 'distribution.<name>' work too)"
+        )
+    if isinstance(fit, str):
+        fit = (fit,)
+    given = tuple(fit)
+    if not given:
+        raise ValueError(f"fit must name at least one of {allowed_txt}")
+    unknown = [nm for nm in given if nm not in aliases]
+    if unknown:
+        raise ValueError(f"unknown parameter name(s) {unknown} in fit; allowed: {allowed_txt}")
+    names = tuple(aliases[nm] for nm in given)
+    if len(set(names)) != len(names):
+        raise ValueError(f"fit names a parameter twice: {list(given)}")
+    return names, tuple(table[nm] for nm in names)
+
+
+def _transform(targets, theta0) -> Transform:
+    """Log space (θ = eᵘ) for `LOG_SPACE_PARAMETERS`; θ = θ_start + s u for the others.
+
+    s = |θ_start|, or a typical magnitude (`_LINEAR_SCALES`) for a zero start value.
+    """
+    is_log = np.array([_field(p) in LOG_SPACE_PARAMETERS for _, p in targets])
+    steps = np.array([
+        abs(t0) if t0 != 0 else _LINEAR_SCALES.get(_field(p), 1.0)
+        for t0, (_, p) in zip(theta0, targets)
+    ])  # fmt: skip
+    return Transform.make(
+        is_log, shift=np.where(is_log, 0.0, theta0), scale=np.where(is_log, 1.0, steps)
+    )
+
+
+# ---------------------------------------------------------------------------------------
+# Checks of the data and the start values
+# ---------------------------------------------------------------------------------------
+
+
+def _wheel_data(load, slip, measured, scale):
+    """Checked loads [N], slips [-], measured quantities (quantities × points), scales."""
+    ld = vector("load", load)
+    sl = vector("slip", slip)
+    m = same_length(load=ld, slip=sl)
+    if (ld <= 0).any():
+        raise ValueError(f"load must be > 0 N; got {ld[int(np.argmax(ld <= 0))]!r}")
+    if (np.abs(sl) > 1).any():
+        raise ValueError(f"slip must lie in [-1, 1]; got {sl[int(np.argmax(np.abs(sl) > 1))]!r}")
+    quantities = tuple(q for q in WHEEL_QUANTITIES if measured[q] is not None)
+    if not quantities:
+        raise ValueError("fit_wheel needs at least one of sinkage, drawbar_pull, motion_resistance")
+    rows = []
+    for q in quantities:
+        y = vector(q, measured[q])
+        same_length(load=ld, **{q: y})
+        rows.append(y)
+    data = np.stack(rows)
+    scale = {} if scale is None else dict(scale)
+    unknown_scale = [k for k in scale if k not in quantities]
+    if unknown_scale:
+        raise ValueError(
+            f"scale has entries {unknown_scale} for quantities not measured {quantities}"
+        )
+    scales = []
+    for q, y in zip(quantities, data):
+        s = np.asarray(scale.get(q, np.sqrt(np.mean(y**2))), dtype=float)
+        if s.ndim > 1 or s.size not in (1, m):
+            raise ValueError(f"scale[{q!r}] must be a scalar or have one value per data point")
+        if not (np.isfinite(s).all() and (s > 0).all()):
+            raise ValueError(f"the residual scale of {q} must be finite and > 0, got {s!r}")
+        scales.append(np.broadcast_to(s, (m,)))
+    # (quantities, points): one compilation for both forms
+    return ld, sl, m, quantities, data, np.stack(scales)
+
+
+def _start_values(snow, distribution, targets) -> dict[str, dict[str, float]]:
+    """Every leaf as a float, owner -> path -> value: scalar, finite; log-space ones
+    > 0 when fitted (>= 0 otherwise)."""
+    fitted_paths = {owner: {p for o, p in targets if o == owner}
+                    for owner in ("terrain", "distribution")}  # fmt: skip
+    start: dict[str, dict[str, float]] = {"terrain": {}, "distribution": {}}
+    objects = {"terrain": snow, "distribution": distribution}
+    labels = {"terrain": "snow", "distribution": "distribution"}
+    for owner, obj in objects.items():
+        if obj is None:
+            continue
+        for path, value in _module_leaves(obj).items():
+            v = np.asarray(value, dtype=float)
+            if v.size != 1:
+                raise ValueError(
+                    f"{labels[owner]}.{path} must be a scalar for fit_wheel, got shape {v.shape}"
+                )
+            v = float(v.reshape(()))
+            fitted = path in fitted_paths[owner]
+            if _field(path) in LOG_SPACE_PARAMETERS:
+                if not math.isfinite(v) or v < 0 or (fitted and v <= 0):
+                    raise ValueError(
+                        f"{labels[owner]}.{path} must be finite and "
+                        f"{'> 0' if fitted else '>= 0'}, got {v!r}"
+                        + (" (it is fitted in log space)" if fitted and v == 0 else "")
+                    )
+            elif not math.isfinite(v):
+                raise ValueError(f"{labels[owner]}.{path} must be finite, got {v!r}")
+            start[owner][path] = v
+    return start
+
+
+def _check_solvable(wheel, snow, distribution, ld, sl, shear) -> None:
+    """The wheel's size, and the start values valid for solve_wheel at every data point."""
+    for nm in ("diameter", "width"):
+        v = np.asarray(getattr(wheel, nm), dtype=float)
+        if v.size != 1 or not (np.isfinite(v).all() and (v > 0).all()):
+            raise ValueError(f"wheel.{nm} must be a finite scalar > 0, got {v!r}")
+    to_np = lambda x: np.asarray(x, dtype=float)
+    with np.errstate(invalid="ignore", over="ignore"):
+        rules = _wheel_checks(
+            jax.tree_util.tree_map(to_np, wheel), jax.tree_util.tree_map(to_np, snow),
+            None if distribution is None else jax.tree_util.tree_map(to_np, distribution),
+            ld, sl, shear,
+        )  # fmt: skip
+    for rule, value, ok, allowed in rules:
+        value = np.asarray(value, dtype=float)
+        good = np.isfinite(value) & np.asarray(ok)
+        if not good.all():
+            shape = np.broadcast_shapes(good.shape, value.shape)
+            first = np.broadcast_to(value, shape)[~np.broadcast_to(good, shape)].flat[0]
+            raise ValueError(
+                f"fit_wheel: the start values are not valid for solve_wheel: {rule} must be "
+                f"finite and {allowed}; got {float(first)!r}"
+            )
+
+
+def _rebuild(obj, values: dict[str, float], dtype):
+    """`obj` with its leaves set to `values` (JAX arrays of `dtype`)."""
+    return _with_leaves(obj, {p: jnp.asarray(v, dtype) for p, v in values.items()})
+
+
+def _status_warnings(status: np.ndarray, m: int) -> list[str]:
+    """Warnings about failed and bottomed-out equilibria at the fitted parameters."""
+    out = []
+    for code in (Status.NOT_CONVERGED, Status.ENTRY_ANGLE_LIMIT, Status.INVALID_INPUT):
+        bad = np.flatnonzero(status == code)
+        if bad.size:
+            out.append(
+                f"{bad.size} of {m} data points have no equilibrium at the fitted parameters "
+                f"(status {code.name}, points {bad.tolist()}); they are left out of the "
+                "standard errors and the SSE. Check the start values and the data."
+            )
+    bottomed = np.flatnonzero(status == Status.BOTTOMED_OUT)
+    if bottomed.size:
+        out.append(
+            f"{bottomed.size} of {m} data points bottom out at the fitted parameters "
+            f"(status BOTTOMED_OUT, points {bottomed.tolist()}): the wheel rests on the "
+            "base, sinkage = z_w, and these points say nothing about p_w."
+        )
+    return out
+
+
+# ---------------------------------------------------------------------------------------
+# The fit
+# ---------------------------------------------------------------------------------------
+
+
+def fit_wheel(
+    wheel: RigidWheel,
+    snow: Terrain,
+    load: Float[ArrayLike, " m"],
+    slip: Float[ArrayLike, " m"],
+    *,
+    sinkage: Float[ArrayLike, " m"] | None = None,
+    drawbar_pull: Float[ArrayLike, " m"] | None = None,
+    motion_resistance: Float[ArrayLike, " m"] | None = None,
+    fit: Sequence[str] = ("p_w", "z_w", "tan_phi"),
+    shear: str = "classic",
+    scale: dict[str, float] | None = None,
+    max_steps: int = 100,
+    nodes_per_panel: int | None = None,
+    solve_max_steps: int = 64,
+    distribution: WongReece | None = None,
+) -> FitResult:
+    """Fit terrain (and stress-distribution) parameters to wheel measurements through
+    the equilibrium (4.14).
+
+    For each data point (load F_z, slip i) the model is `snowjax.solve_wheel`: the entry
+    angle with W(θ0) = F_z (4.14), then sinkage (4.15), motion resistance (4.16) and
+    drawbar pull (2.10), on any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+    `LayeredSnow`) with the front-region stresses (`distribution=None`) or Wong & Reece's
+    distribution.  All points are solved in one vmapped call per residual evaluation,
+    and `optimistix.least_squares` (Levenberg–Marquardt) differentiates straight through
+    that root find with the implicit function theorem.
+
+    **Parameter names** (`fit=`): every array leaf of the terrain and of the
+    distribution, by field path — `WongSnow`: `p_w`, `z_w`, `cohesion`, `tan_phi`,
+    `shear_modulus`; `BekkerSoil`: `n`, `k_c`, `k_phi`, `cohesion`, `tan_phi`,
+    `shear_modulus`; `ReeceSoil`: `n`, `k_c_prime`, `k_phi_prime`, `unit_weight`,
+    `cohesion`, `tan_phi`, `shear_modulus`; `LayeredSnow`: `top.p_w`, ...,
+    `bottom.shear_modulus` (dotted: the nested layers) and `ice_failure_pressure`;
+    `WongReece`: `c1`, `c2`, `c3`.  `distribution.c1` / `terrain.k_phi` (prefixed) are
+    accepted too, and are the only form of a name both objects hold.
+    `fit_parameter_names(terrain, distribution)` lists them; an unknown name raises a
+    `ValueError` that lists them.  `FitResult.params` uses the unprefixed names.
+
+    **Fitted variables.**  Parameters that are never negative — `p_w`, `z_w`,
+    `cohesion`, `tan_phi`, `shear_modulus`, `n`, `unit_weight`, `ice_failure_pressure`
+    (`LOG_SPACE_PARAMETERS`) — are fitted as u = ln θ (so they stay positive; their
+    start value must be > 0).  The moduli that may be zero or negative (`k_c`, `k_phi`,
+    `k_c_prime`, `k_phi_prime`: Bekker's k_c is negative for some soils) and the
+    distribution's `c1`, `c2`, `c3` (c3 < 0 puts the exit behind the axle) are fitted
+    linearly, θ = θ_start + s u with s = |θ_start|, or, for a zero start value, a
+    typical magnitude (k_c 1e3 N/m^(n+1), k_phi 1e5 N/m^(n+2), k'_c and k'_φ 1,
+    c1..c3 0.1).  The other parameters keep their values in `snow` / `distribution`,
+    which also supply the start values.  Standard errors come back by the delta
+    method, se(θ) = θ se(u) (log) or s se(u) (linear).  Iterates where the model is
+    invalid (e.g. c1 + c2 i outside [0, 1)) get the failed-point residual below, so
+    the optimiser steps back from them.
+
+    **Residuals.**  For each measured quantity q, r = (model − data) / scale_q, stacked
+    quantity-major (all sinkages, then all drawbar pulls, then all motion resistances).
+    The default scale_q is the root-mean-square of the measured values, which weighs every
+    quantity equally in relative terms whatever its unit and keeps residuals finite when
+    drawbar pull crosses zero; pass `scale={"sinkage": σ_z, ...}` (m, N; a scalar or one
+    value per point) with the measurement uncertainties for a weighted fit.
+    `FitResult.residuals` and `sse` are these dimensionless scaled residuals;
+    `info["predictions"]` holds the model values at the optimum in SI units.
+
+    **Failed equilibria.**  A point whose solve fails at some iterate (status
+    `NOT_CONVERGED`, `ENTRY_ANGLE_LIMIT` or `INVALID_INPUT`) gets a constant residual of
+    10 (zero gradient) there, so the optimiser rejects steps into such regions instead of
+    being poisoned by NaN.  If points still fail at the optimum they are left out of the
+    standard errors and named in `warnings`; bottomed-out points (`BOTTOMED_OUT`, the
+    wheel on the base: sinkage = z_w) are valid model values but carry no information
+    on p_w, and are reported too.  `info["status"]` holds every point's status.
+
+    **Arguments:**
+
+    - `wheel`: `RigidWheel` (scalar diameter [m], width [m]).
+    - `snow`: the terrain, any `snowjax.Terrain` with scalar leaves (SI units: Pa, m,
+      N/m^(n+1), N/m^(n+2), N/m^3; see each class): start values of the fitted
+      parameters and fixed values of the rest.  Every value must be valid for
+      `solve_wheel`.
+    - `load`: F_z [N] (> 0), one per data point (several loads allowed).
+    - `slip`: driving slip i [-] in [-1, 1], same length.
+    - `sinkage` [m], `drawbar_pull` [N], `motion_resistance` [N]: measured values, same
+      length; at least one of them.
+    - `fit`: names of the parameters to fit (see above; a non-empty subset of
+      `fit_parameter_names(snow, distribution)`).
+    - `shear`: `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`;
+      `"simplified"` only for `WongSnow` without a distribution).
+    - `scale`: optional residual scale per quantity [m or N] (scalar or per point), see
+      above.
+    - `max_steps`: Levenberg–Marquardt step limit; `nodes_per_panel`, `solve_max_steps`:
+      passed to `solve_wheel` (its quadrature nodes and Newton iteration limit).
+    - `distribution`: `None` (the thesis's front-region stresses) or a
+      `snowjax.WongReece` (c1, c2, c3 [-], scalar leaves) whose leaves can be fitted too.
+
+    **Returns:** a `FitResult`; `info` has `snow` and `terrain` (the fitted terrain, of
+    the type of `snow`), `distribution` (the fitted distribution or `None`),
+    `transforms` (name -> `"log"` / `"linear"`), `predictions` (dict of model values at
+    the optimum), `status`, `scale`.
+
+    Use float64 (`jax.config.update("jax_enable_x64", True)`): the standard errors need
+    derivatives accurate well beyond float32.  Each new combination of data length,
+    fitted names, measured quantities, terrain / distribution type and shear model
+    compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
+    a second.
+    """
+    if not isinstance(wheel, RigidWheel):
+        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+    if not isinstance(snow, Terrain):
+        raise TypeError(
+            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
+            f"got {type(snow).__name__}"
+        )
+    if distribution is not None and not isinstance(distribution, WongReece):
+        raise TypeError(
+            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+        )
+    names, targets = _resolve_fit_names(fit, snow, distribution)
+    if shear not in ("classic", "simplified", "none"):
+        raise ValueError(f"shear must be 'classic', 'simplified' or 'none', got {shear!r}")
+    shear_model = cast(ShearModel, shear)  # one of the three, checked above
+    _check_model(wheel, snow, distribution, shear_model)
+
+    measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,
+                "motion_resistance": motion_resistance}  # fmt: skip
+    ld, sl, m, quantities, data, scales = _wheel_data(load, slip, measured, scale)
+    m_total = m * len(quantities)
+    if m_total <= len(names):
+        raise ValueError(
+            f"fit_wheel fits {len(names)} parameters and needs more than {len(names)} "
+            f"measured values; got {m_total}"
+        )
+    start = _start_values(snow, distribution, targets)
+    _check_solvable(wheel, snow, distribution, ld, sl, shear_model)
+
+    dtype = jnp.result_type(float)
+    wheel_a = RigidWheel(
+        jnp.asarray(float(wheel.diameter), dtype), jnp.asarray(float(wheel.width), dtype)
+    )
+    if isinstance(snow, WongSnow):
+        snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
+    else:
+        snow_a = _rebuild(snow, start["terrain"], dtype)
+    dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
+    theta0 = np.array([start[o][p] for o, p in targets])
+    transform = _transform(targets, theta0)
+    residual = _WheelResidual(
+        names=names,
+        quantities=quantities,
+        shear=shear_model,
+        nodes_per_panel=None if nodes_per_panel is None else int(nodes_per_panel),
+        solve_max_steps=int(solve_max_steps),
+        targets=targets,
+    )
+    u0 = np.array([
+        math.log(t0) if log else 0.0 for t0, log in zip(theta0, transform.log)
+    ])  # fmt: skip
+    args = (
+        wheel_a,
+        snow_a,
+        dist_a,
+        jnp.asarray(ld, dtype),
+        jnp.asarray(sl, dtype),
+        jnp.asarray(data, dtype),
+        jnp.asarray(scales, dtype),
+        transform.cast(dtype),
+    )
+    sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
+    pred, status = sol.aux
+
+    warnings: list[str] = []
+    if dtype != jnp.float64:
+        warnings.append(
+            "computed in float32: enable float64 (jax_enable_x64) for reliable standard errors."
+        )
+    warnings += sol.warnings
+    status = np.asarray(status).astype(int)
+    warnings += _status_warnings(status, m)
+    good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
+    rows = np.tile(good, len(quantities))
+    r_used = np.where(rows, sol.residual, 0.0)
+    theta = transform.values(sol.u)
+    diameter = float(wheel.diameter)
+    for k, nm in enumerate(names):
+        if _field(targets[k][1]) == "z_w" and theta[k] >= diameter:
+            warnings.append(
+                f"{nm} = {theta[k]:.4g} m is not below the wheel diameter "
+                f"{diameter:g} m: the data do not reach the base, and the model gives no "
+                f"derivative with respect to {nm} there (fix {nm} or add data near the base)."
+            )
+    d = transform.jacobian(sol.u)
+    part = estimate(sol.jacobian[rows], sol.residual[rows], names, theta, d, fitted=names)
+
+    final = {o: dict(start[o]) for o in start}
+    for (owner, path), v in zip(targets, theta):
+        final[owner][path] = float(v)
+    if isinstance(snow, WongSnow):
+        fitted_snow = WongSnow(**final["terrain"])
+    else:
+        fitted_snow = _rebuild(snow, final["terrain"], dtype)
+    fitted_dist = None
+    if distribution is not None:
+        fitted_dist = _rebuild(distribution, final["distribution"], dtype)
+    q_txt = ", ".join(quantities)
+    model_txt = ""
+    if not (isinstance(snow, WongSnow) and distribution is None):
+        model_txt = f", {type(snow).__name__}" + (
+            "" if distribution is None else f" with {type(distribution).__name__}"
+        )
+    units = {nm: _PARAMETER_UNITS.get(_field(p), "") for nm, (_, p) in zip(names, targets)}
+    return fit_result(
+        sol,
+        [part],
+        residuals=r_used,
+        warnings=warnings,
+        units=units,
+        info={
+            "title": f"Wheel calibration through the equilibrium (4.14): {m} points "
+            f"({q_txt}), shear={shear!r}{model_txt}",
+            "snow": fitted_snow,
+            "terrain": fitted_snow,
+            "distribution": fitted_dist,
+            "transforms": {nm: "log" if log else "linear" for nm, log in zip(names, transform.log)},
+            "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},
+            "status": status,
+            "scale": {q: scales[k].copy() for k, q in enumerate(quantities)},
+            "quantities": quantities,
+            "sse_unit": "(scaled residuals, dimensionless)",
+        },
+    )
