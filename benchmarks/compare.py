@@ -8,8 +8,10 @@ two separate `benchmarks/run.py` tables cannot show a 10 % change.  This script 
 the old revision into a temporary git worktree and measures both trees in fresh processes,
 alternating old, new, old, new, ... for `--rounds` rounds; each row keeps the best time of
 each tree over all rounds.  Rows: `solve_wheel` throughput at batch 1 to 100,000 (thesis
-tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64) and the
-in-step latency (4 wheels in a jitted `lax.scan`, warm-started).  `--readme` writes the
+tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the
+in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and the cost of
+one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200 steps of
+10 ms).  `--readme` writes the
 table between `<!-- compare:start -->` and `<!-- compare:end -->` in README.md.
 """
 
@@ -66,6 +68,12 @@ def measure() -> dict[str, float]:
     scan = jax.jit(lambda ts: jax.lax.scan(step, jnp.full(4, 0.5), ts))
     ts = jnp.arange(500, dtype=float)
     out["in-step, per wheel"] = best(lambda: jax.block_until_ready(scan(ts)), 3) / (500 * 4)
+
+    vehicle = sj.Vehicle(mass=2000.0, wheel_inertia=1.5, wheel=wheel, num_wheels=4)
+    sim = lambda: sj.simulate_longitudinal(vehicle, snow, 400.0, 2.0, 0.01)  # noqa: E731
+    out["simulate_longitudinal, per wheel-step"] = best(lambda: jax.block_until_ready(sim()), 3) / (
+        200 * 4
+    )
     return out
 
 
@@ -101,6 +109,11 @@ def main(argv=None) -> None:
     parser.add_argument("--new", help="measure this revision instead of the working tree")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--readme", action="store_true", help="write the table into README.md")
+    parser.add_argument(
+        "--marker",
+        default="compare",
+        help="README block <!-- MARKER:start --> (default %(default)s)",
+    )
     args = parser.parse_args(argv)
 
     def rev(name):
@@ -156,7 +169,7 @@ def main(argv=None) -> None:
     if args.readme:
         readme = ROOT / "README.md"
         text = readme.read_text()
-        start, end = "<!-- compare:start -->", "<!-- compare:end -->"
+        start, end = f"<!-- {args.marker}:start -->", f"<!-- {args.marker}:end -->"
         if start not in text:
             raise SystemExit(f"README.md has no {start} marker")
         head, rest = text.split(start, 1)
