@@ -91,13 +91,13 @@ from ._fit.plate import thesis_plate_test as thesis_plate_test
 from ._fit.tire import thesis_tire_table as thesis_tire_table
 
 # --- vehicle simulation ---
-from ._sim.simulation import TorqueProfile as TorqueProfile
-from ._sim.simulation import Trajectory as Trajectory
-from ._sim.simulation import Vehicle as Vehicle
-from ._sim.simulation import WheelForces as WheelForces
-from ._sim.simulation import simulate_longitudinal as simulate_longitudinal
-from ._sim.simulation import wheel_forces as wheel_forces
-from ._sim.simulation import wheel_kinematics as wheel_kinematics
+from ._sim.stepping import simulate_longitudinal as simulate_longitudinal
+from ._sim.vehicle import TorqueProfile as TorqueProfile
+from ._sim.vehicle import Trajectory as Trajectory
+from ._sim.vehicle import Vehicle as Vehicle
+from ._sim.vehicle import WheelForces as WheelForces
+from ._sim.vehicle import wheel_forces as wheel_forces
+from ._sim.vehicle import wheel_kinematics as wheel_kinematics
 
 # --- sweeps ---
 from ._sweep.sweep import SweepResult as SweepResult

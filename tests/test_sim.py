@@ -5,18 +5,24 @@ Every simulation here is one compiled program, `_run`: a 2-wheel vehicle, 80 imp
 steps of 0.05 s, the thesis tyre and snow with p_w and tan(phi) traced, and a 3-knot
 `TorqueProfile`; it returns the trajectory and the forward-mode (`diffrax.ForwardMode`)
 derivatives of the final speed w.r.t. (p_w, tan phi, the three knot torques).  The
-scenarios differ only in array values, so they share that compile.
+scenarios differ only in array values, so they share that compile.  The last section's
+examples (why the simulation keeps its own implicit Euler step and damped Newton iteration
+instead of diffrax's and optimistix's) compile small programs of their own.
 """
 
 import diffrax
+import equinox as eqx
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
+import optimistix as optx
 import pytest
 import scipy.optimize
 
 import snowjax as sj
 from snowjax import Status
+from snowjax._sim.levenberg_marquardt import _LevenbergMarquardt
 
 from .notebook_runner import outputs_text, run_notebook
 
@@ -296,3 +302,147 @@ def test_notebook_runs(tmp_path):
     text = outputs_text(nb)
     assert "recovered p_w" in text
     assert "time to 5 m/s" in text
+
+
+# ----------------------------------------------------------------------------------------
+# Why the simulation keeps its own implicit Euler step and damped Newton iteration
+# ----------------------------------------------------------------------------------------
+
+RADIUS = float(WHEEL.diameter) / 2
+COASTING = jnp.array([3.0, 0.0, 3.0 / RADIUS, 3.0 / RADIUS])  # (v, x, omega_1, omega_2)
+TOL = 1e-9  # the simulation's float64 rtol = atol
+# How the simulation differentiates each implicit step (`snowjax/_sim/stepping.py`).
+STEP_ADJOINT = optx.ImplicitAdjoint(linear_solver=lx.AutoLinearSolver(well_posed=False))
+
+
+def _rate(y, torque, p_w):
+    """dy/dt of VEHICLE at y = (v, x, omega_1, omega_2), through `wheel_forces`."""
+    snow = sj.WongSnow(p_w, SNOW.z_w, SNOW.cohesion, SNOW.tan_phi, SNOW.shear_modulus)
+    f = sj.wheel_forces(y[:1], y[2:], VEHICLE.wheel_load, WHEEL, snow)
+    dv = jnp.sum(f.longitudinal_force) / VEHICLE.mass
+    domega = (torque - f.resisting_torque) / VEHICLE.wheel_inertia
+    return jnp.concatenate([dv[None], y[:1], domega])
+
+
+def _implicit_step(y0, torque):
+    """Residual of one implicit Euler step of DT from y0, as `fn(y1, p_w)`."""
+    return lambda y, p_w: y - y0 - DT * _rate(y, torque, p_w)
+
+
+def _solve_step(step, y0, solver, options=None, p_w=SNOW.p_w):
+    return optx.root_find(
+        step,
+        solver,
+        y0,
+        p_w,
+        options=options,
+        throw=False,
+        max_steps=100,
+        adjoint=STEP_ADJOINT,
+    )
+
+
+def _num_equations(jaxpr):
+    """Equations of a jaxpr, those of its sub-jaxprs (loops, branches, calls) included."""
+    count = 0
+    for eqn in jaxpr.eqns:
+        count += 1
+        for param in eqn.params.values():
+            for sub in param if isinstance(param, tuple | list) else (param,):
+                inner = getattr(sub, "jaxpr", sub)
+                if hasattr(inner, "eqns"):
+                    count += _num_equations(inner)
+    return count
+
+
+def test_diffrax_implicit_euler_cannot_replace_the_warm_start_step():
+    """`diffrax.ImplicitEuler` with optimistix's Newton, under the simulation's step-size
+    controller, keeps a step whose root find failed: coasting from 3 m/s, where
+    `simulate_longitudinal` takes every step of DT (the coasting test above), the
+    integration stops at its first step.  Nor can it carry the warm start of the wheel
+    equilibria from step to step: its solver state is None."""
+    ts = jnp.arange(21) * DT
+    controller = diffrax.ClipStepSizeController(
+        diffrax.PIDController(rtol=0.0, atol=1.0, dtmax=2 * DT, dtmin=1e-4 * DT), step_ts=ts
+    )
+    solver = diffrax.ImplicitEuler(
+        root_finder=optx.Newton(rtol=TOL, atol=TOL), root_find_max_steps=100
+    )
+    term = diffrax.ODETerm(lambda t, y, args: _rate(y, 0.0, SNOW.p_w))
+    sol = diffrax.diffeqsolve(
+        term,
+        solver,
+        ts[0],
+        ts[-1],
+        DT,
+        COASTING,
+        stepsize_controller=controller,
+        saveat=diffrax.SaveAt(ts=ts),
+        max_steps=200,
+        throw=False,
+    )
+    assert sol.result != diffrax.RESULTS.successful
+    assert int(sol.stats["num_accepted_steps"]) <= 1
+    assert solver.init(term, ts[0], ts[1], COASTING, None) is None
+
+
+@pytest.mark.slow
+def test_optimistix_root_finders_cannot_replace_the_damped_newton():
+    """The coasting vehicle's first implicit step (stiff, on the S-shaped torque–slip
+    curve): `_LevenbergMarquardt` solves it; `optx.Newton`, undamped, does not in 100
+    iterations; `optx.LevenbergMarquardt` and `optx.Dogleg` raise on their first step
+    (with their default forward-mode Jacobian they apply a zero placeholder
+    linearisation, on which the implicit JVP of `solve_wheel`'s own root find raises)."""
+    step = _implicit_step(COASTING, 0.0)
+    ours = _solve_step(step, COASTING, _LevenbergMarquardt(rtol=TOL, atol=TOL))
+    assert ours.result == optx.RESULTS.successful
+    assert float(jnp.max(jnp.abs(step(ours.value, SNOW.p_w)))) < TOL
+    newton = _solve_step(step, COASTING, optx.Newton(rtol=TOL, atol=TOL))
+    assert newton.result != optx.RESULTS.successful
+    for solver in (optx.LevenbergMarquardt(rtol=TOL, atol=TOL), optx.Dogleg(rtol=TOL, atol=TOL)):
+        with pytest.raises(eqx.EquinoxRuntimeError):
+            _solve_step(step, COASTING, solver)
+
+
+@pytest.mark.slow
+def test_optimistix_reverse_mode_workaround_fails_or_costs_more():
+    """With a reverse-mode Jacobian (`options=dict(jac="bwd")`) optimistix's damped solvers
+    run, but: on a typical driving step (2 m/s, slip 0.25, 545 N m) `optx.LevenbergMarquardt`
+    takes at least twice the iterations (Jacobians) of `_LevenbergMarquardt`, and its
+    forward-mode derivative raises on the first step from rest (which the simulation
+    retries as smaller steps), where `_LevenbergMarquardt`'s is finite; `optx.Dogleg`
+    takes one iteration more, and its reverse-mode Jacobians make the
+    forward-mode-differentiated step a much larger program (measured on whole
+    simulations: twice the compile time, 1.8-2.5x the run time)."""
+    omega = 2.0 / (RADIUS * (1 - 0.25))
+    driving = jnp.array([2.0, 0.0, omega, omega])
+    step = _implicit_step(driving, 545.0)
+    ours = _LevenbergMarquardt(rtol=TOL, atol=TOL)
+    library_lm = optx.LevenbergMarquardt(rtol=TOL, atol=TOL)
+    dogleg = optx.Dogleg(rtol=TOL, atol=TOL)
+    bwd = dict(jac="bwd")
+
+    def iterations(solver, options=None):
+        sol = _solve_step(step, driving, solver, options)
+        assert sol.result == optx.RESULTS.successful
+        return int(sol.stats["num_steps"])
+
+    assert iterations(library_lm, bwd) >= 2 * iterations(ours)
+    assert iterations(dogleg, bwd) > iterations(ours)
+
+    def differentiated(y0, torque, solver, options=None):
+        step = _implicit_step(y0, torque)
+        value = lambda p_w: _solve_step(step, y0, solver, options, p_w).value  # noqa: E731
+        return lambda p_w: jax.jvp(value, (p_w,), (jnp.ones_like(p_w),))
+
+    rest = jnp.zeros(4)
+    _, tangent = differentiated(rest, 545.0, ours)(SNOW.p_w)
+    assert np.all(np.isfinite(tangent))
+    with pytest.raises(eqx.EquinoxRuntimeError):
+        differentiated(rest, 545.0, library_lm, bwd)(SNOW.p_w)
+
+    def program_size(solver, options=None):
+        jvp = differentiated(driving, 545.0, solver, options)
+        return _num_equations(jax.make_jaxpr(jvp)(SNOW.p_w).jaxpr)
+
+    assert program_size(dogleg, bwd) > 1.4 * program_size(ours)

@@ -1,0 +1,388 @@
+"""Vehicle model of the longitudinal simulation: the equations of motion, the slip and its
+regularisation at rest, and the wheel force function `wheel_forces`.
+
+**Model.**  A rigid vehicle of mass m moves along x on `num_wheels` identical rigid wheels,
+each carrying the static share `m g / n` of its weight.  The state is
+`y = (v, x, omega_1, ..., omega_n)` (speed [m/s], distance [m], wheel spins [rad/s]):
+
+    m dv/dt        = sum_k F_k          F_k: drawbar pull of wheel k, eq. (2.10)
+    dx/dt          = v
+    I domega_k/dt  = T_k(t) - M_k       M_k: wheel torque resisted by the snow, eq. (2.12)
+
+Each wheel's (F_k, M_k) is the thesis's equilibrium of a wheel rolling steadily into
+undisturbed snow (eq. 4.14, `solve_wheel`) at the wheel's current slip: the contact model
+is **quasi-static**, so transients faster than the passage of the snow under the wheel
+(contact length / speed) are outside it.  Not modelled: aerodynamic drag, grade, load
+transfer, tyre deflection.  A wheel whose applied torque is zero rolls freely (undriven).
+
+**Slip.**  The argument of `solve_wheel` is the driving slip of eq. (2.6),
+`i = 1 - v / (omega r)`, computed as `(omega r - v) / max(|omega r|, v / 2)`, clipped to
+[-1, 1]: exact for driving (0 <= v <= omega r, i in [0, 1]) and for braking down to
+`v = 2 omega r` (i = -1); harder braking, up to the locked wheel, is held at i = -1, where
+the shear stress of the thesis's snow (K << D) is already mobilised backwards over nearly
+the whole contact.  A wheel travelling backwards (v + omega r < 0) is the mirror image of
+one travelling forwards: the model is evaluated at (-v, -omega) and its forces change sign.
+
+**Start from rest (regularisation).**  At v = omega = 0 the slip is 0/0, and the model,
+whose forces at zero slip are not zero (the rim's geometry shears the snow even at i = 0),
+does not describe a wheel at rest.  Both contact forces are therefore multiplied by
+
+    phi(|v + omega r| / (2 speed_eps)),    phi(s) = 1 - (1 - min(s, 1))^2,
+
+which is C^1, 0 at rest and exactly 1 once the mean of hub and rim speed exceeds
+`speed_eps` (default 0.05 m/s); the slip ratio itself stays bounded (|i| <= 1) and only
+its 0/0 at the origin is guarded.  Consequences, all tested: a vehicle at rest with no
+torque stays at rest; a coasting vehicle comes to rest and stays there; a torque below
+the self-propelled torque `M_w(i*)` (i* where the drawbar pull vanishes) leaves the
+vehicle creeping at a speed below `speed_eps` (a viscous contact, the price of the
+regularisation); nothing in states with `(v + omega r) / 2 >= speed_eps` depends on
+`speed_eps`.  The force factor is also 0 on the counter-rotation line `v = -omega r`
+(wheel spinning backwards as fast as the vehicle moves forwards), where the mirror
+switches: the model does not describe wheels spinning against the direction of travel,
+so model brakes as a torque that opposes the spin (a controller `torque(t, v, omega)`);
+a constant negative torque stops the vehicle and then drives it backwards.
+
+The time stepping of these equations is `stepping.simulate_longitudinal`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import diffrax
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float, Int
+
+from .._leaves import _as_float, _is_traced
+from .._terrain.base import Terrain
+from .._wheel.contact import ShearModel, _check_shear
+from .._wheel.distribution import WongReece
+from .._wheel.equilibrium import _check_model, solve_wheel
+from .._wheel.geometry import RigidWheel
+
+__all__ = [
+    "STANDARD_GRAVITY",
+    "DEFAULT_SPEED_EPS",
+    "Vehicle",
+    "TorqueProfile",
+    "WheelForces",
+    "Trajectory",
+    "wheel_forces",
+    "wheel_kinematics",
+]
+
+STANDARD_GRAVITY = 9.80665  # [m/s^2]
+DEFAULT_SPEED_EPS = 0.05  # [m/s]
+
+
+# ---------------------------------------------------------------------------------------
+# Slip and the force function
+# ---------------------------------------------------------------------------------------
+
+
+def _kinematics(speed, wheel_speed, radius, speed_eps):
+    """(model slip, direction, force scale) of the regularisation in the module docs."""
+    rim = wheel_speed * radius
+    direction = jnp.where(speed + rim >= 0, 1.0, -1.0).astype(rim.dtype)
+    v, u = direction * speed, direction * rim  # the mirror image travelling forwards
+    floor = float(np.sqrt(np.finfo(rim.dtype).tiny))  # only to avoid 0 / 0 at rest
+    slip = (u - v) / jnp.maximum(jnp.maximum(jnp.abs(u), 0.5 * jnp.abs(v)), floor)
+    slip = jnp.clip(slip, -1.0, 1.0)
+    gap = 1 - jnp.minimum(jnp.abs(speed + rim) / (2 * speed_eps), 1.0)
+    scale = 1 - gap * gap  # C^1: 0 at v + omega r = 0, 1 from |v + omega r| >= 2 eps on
+    return slip, direction, scale
+
+
+def wheel_kinematics(
+    speed: Float[ArrayLike, "..."],
+    wheel_speed: Float[ArrayLike, "..."],
+    radius: Float[ArrayLike, "..."],
+    speed_eps: float = DEFAULT_SPEED_EPS,
+) -> tuple[Float[Array, "..."], Float[Array, "..."]]:
+    """Slip and force factor of a wheel as the simulation uses them (regularised at rest).
+
+    - slip: the driving slip of eq. (2.6), `i = (omega r - v) / max(omega r, v / 2)`
+      for a wheel travelling forwards (v + omega r >= 0), clipped to [-1, 1]; for one
+      travelling backwards, the same of (-v, -omega).  Equal to the thesis's
+      `1 - v / (omega r)` for 0 <= v <= 2 omega r; 1 for a wheel spinning in place,
+      -1 for a locked or strongly braked one, 0 at rest.
+    - force factor: `phi(|v + omega r| / (2 speed_eps))`, `phi(s) = 1 - (1 - min(s,
+      1))^2`, the factor on both contact forces: 0 at rest, 1 as soon as
+      `|v + omega r| >= 2 speed_eps`, C^1 in between.  The forces of `wheel_forces` are
+      `direction * factor * (drawbar pull, M_w)` at this slip, direction =
+      sign(v + omega r).
+
+    **Arguments:** `speed` v [m/s], `wheel_speed` omega [rad/s], `radius` r = D/2 [m],
+    `speed_eps` [m/s] (> 0).
+
+    **Returns:** `(slip [-], force_factor [-])`.
+    """
+    dtype = jnp.result_type(speed, wheel_speed, radius, float)
+    slip, _, factor = _kinematics(
+        jnp.asarray(speed, dtype),
+        jnp.asarray(wheel_speed, dtype),
+        jnp.asarray(radius, dtype),
+        speed_eps,
+    )
+    return slip, factor
+
+
+class WheelForces(eqx.Module):
+    """Forces of the snow on one rigid wheel in a simulation step (see `wheel_forces`).
+
+    - `longitudinal_force`: drawbar pull (2.10) along +x on the axle [N] (regularised).
+    - `resisting_torque`: M_w (2.12), the torque of the snow about the axle opposing a
+      forward-spinning wheel [N m] (regularised); the wheel obeys
+      `I domega/dt = T - resisting_torque`.
+    - `sinkage`: z0 (4.15) [m] (not regularised: the equilibrium sinkage at the slip).
+    - `entry_angle`: theta0 [rad]; pass it back as `initial_entry_angle` next step.
+    - `slip`: the slip i [-] the contact model was evaluated at (`wheel_kinematics`).
+    - `status`: `Status` code of the equilibrium solve (int32).
+    """
+
+    longitudinal_force: Float[Array, "..."]
+    resisting_torque: Float[Array, "..."]
+    sinkage: Float[Array, "..."]
+    entry_angle: Float[Array, "..."]
+    slip: Float[Array, "..."]
+    status: Int[Array, "..."]
+
+
+def _wheel_forces(
+    speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess, n, steps, distribution=None
+):
+    slip, direction, scale = _kinematics(speed, wheel_speed, wheel.diameter / 2, speed_eps)
+    st = solve_wheel(
+        wheel,
+        snow,
+        load,
+        slip,
+        shear,
+        distribution=distribution,
+        nodes_per_panel=n,
+        max_steps=steps,
+        initial_entry_angle=guess,
+    )
+    return WheelForces(
+        longitudinal_force=direction * scale * st.drawbar_pull,
+        resisting_torque=direction * scale * st.torque,
+        sinkage=st.sinkage,
+        entry_angle=st.entry_angle,
+        slip=slip * jnp.ones_like(st.sinkage),
+        status=st.status,
+    )
+
+
+_wheel_forces_jit = eqx.filter_jit(_wheel_forces)
+
+
+def _check_concrete(name, value, ok, allowed):
+    if _is_traced(value) or value is None:
+        return
+    arr = np.asarray(value, dtype=float)
+    if not np.all(np.isfinite(arr) & ok(arr)):
+        raise ValueError(f"{name} must be finite and {allowed}; got {value!r}")
+
+
+def wheel_forces(
+    speed: Float[ArrayLike, "..."],
+    wheel_speed: Float[ArrayLike, "..."],
+    load: Float[ArrayLike, "..."],
+    wheel: RigidWheel,
+    snow: Terrain,
+    shear: ShearModel = "classic",
+    *,
+    speed_eps: float = DEFAULT_SPEED_EPS,
+    initial_entry_angle: Float[ArrayLike, "..."] | None = None,
+    nodes_per_panel: int | None = None,
+    max_steps: int = 64,
+    distribution: WongReece | None = None,
+) -> WheelForces:
+    """Snow forces on a rigid wheel from its kinematic state: the force function to call
+    inside any simulator step (MJX, Brax, your own integrator).
+
+    Computes the slip and force factor of `wheel_kinematics` (eq. 2.6, regularised at
+    rest), solves the quasi-static equilibrium (4.14) with `solve_wheel` at that slip,
+    and returns the drawbar pull (2.10) as the longitudinal force on the axle and M_w
+    (2.12) as the torque resisting the wheel's spin, both multiplied by the force factor
+    (and mirrored for a wheel travelling backwards; see the module documentation).
+    Pure JAX: works under `jax.jit`, `jax.vmap`, `jax.grad` and `jax.jvp`; `speed`,
+    `wheel_speed`, `load` and `initial_entry_angle` broadcast with NumPy rules.
+
+    **Arguments:**
+
+    - `speed`: v, forward speed of the axle over the snow [m/s].
+    - `wheel_speed`: omega, spin of the wheel [rad/s] (positive rolls forwards).
+    - `load`: vertical load F_z on the wheel [N], > 0.
+    - `wheel`, `snow`: `RigidWheel` (D, b [m]) and the terrain, any `snowjax.Terrain`
+      (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets).
+    - `shear`: shear model of `solve_wheel` (`"classic"`, `"simplified"`, `"none"`;
+      `"simplified"` only for `WongSnow` without a distribution).
+    - `speed_eps`: regularisation speed [m/s], > 0.
+    - `initial_entry_angle`: warm start theta0 [rad] for `solve_wheel`, e.g. the
+      `entry_angle` of the previous simulator step; changes only the iteration count.
+    - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
+    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+      (c1, c2, c3 [-]), passed to `solve_wheel`.
+
+    **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage
+    [m], entry angle [rad], slip [-], status).
+
+    **Use in MJX / Brax.**  For each wheel body: v = the axle's velocity along the
+    wheel's heading (from `mjx.Data.cvel` or the free joint's `qvel`), omega = the wheel
+    hinge's `qvel`, load = the static share of the weight or the suspension force; call
+    `wheel_forces` once on all wheels (arrays broadcast) and write
+    `longitudinal_force * heading` (force, world frame) and
+    `-resisting_torque * axle` (torque about the spin axis) into rows of
+    `data.xfrc_applied` (MJX; the Brax MJX pipeline steps the same `mjx.Data`) before
+    `mjx.step`; disable MuJoCo's own wheel–ground contact for those geoms and carry the
+    vertical load by a spring–damper or a height constraint at `sinkage`.  Keep
+    `entry_angle` in the environment state and pass it back as `initial_entry_angle`.
+    The contact forces are quasi-static: the simulator's step should resolve the wheel
+    spin dynamics (the wheel equation is stiff near the self-propelled slip; explicit
+    steps need dt well below `I omega^2 r / (v dM_w/di)`, or use an implicit step as
+    `simulate_longitudinal` does).
+
+    **Errors.**  With concrete inputs, non-finite `speed`/`wheel_speed`, `load <= 0` or
+    `speed_eps <= 0` raise `ValueError`; under `jit` invalid elements give
+    `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
+    """
+    _check_shear(shear)
+    _check_model(wheel, snow, distribution, shear)
+    _check_concrete("speed", speed, lambda x: np.ones_like(x, bool), "a number [m/s]")
+    _check_concrete("wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]")
+    _check_concrete("load", load, lambda x: x > 0, "> 0 N")
+    if not (np.isfinite(speed_eps) and speed_eps > 0):
+        raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
+    dtype = jnp.result_type(speed, wheel_speed, load, float)
+    return _wheel_forces_jit(
+        jnp.asarray(speed, dtype),
+        jnp.asarray(wheel_speed, dtype),
+        jnp.asarray(load, dtype),
+        wheel,
+        snow,
+        shear,
+        float(speed_eps),
+        initial_entry_angle,
+        nodes_per_panel,
+        int(max_steps),
+        distribution,
+    )
+
+
+# ---------------------------------------------------------------------------------------
+# Vehicle, torque input, trajectory
+# ---------------------------------------------------------------------------------------
+
+
+class Vehicle(eqx.Module):
+    """A longitudinal vehicle on `num_wheels` identical rigid wheels.
+
+    **Fields:**
+
+    - `mass`: total mass m, wheels included [kg]; every wheel carries
+      `m g / num_wheels` (g = 9.80665 m/s^2), with no load transfer.
+    - `wheel_inertia`: I, moment of inertia of each wheel about its axle, including the
+      driveline reflected to it [kg m^2]; scalar or one value per wheel.
+    - `wheel`: `RigidWheel` (diameter D, width b [m]).
+    - `num_wheels`: number of wheels n (static).  Which of them are driven is set by
+      the torque: a wheel with zero applied torque rolls freely.
+    """
+
+    mass: Float[Array, ""] = eqx.field(converter=_as_float)
+    wheel_inertia: Float[Array, "..."] = eqx.field(converter=_as_float)
+    wheel: RigidWheel
+    num_wheels: int = eqx.field(static=True, default=4)
+
+    @property
+    def wheel_load(self) -> Float[Array, ""]:
+        """Static vertical load on each wheel, `m g / n` [N]."""
+        return self.mass * STANDARD_GRAVITY / self.num_wheels
+
+
+class TorqueProfile(eqx.Module):
+    """Applied wheel torque as a piecewise-linear function of time.
+
+    `T(t)` interpolates `values` linearly between the knot `times` and is constant
+    beyond the ends, so it is differentiable w.r.t. every knot value (the leaves are
+    arrays: pass the profile through `jax.grad`, or optimise `values`).
+
+    **Fields:**
+
+    - `times`: knot times [s], increasing, shape (k,).
+    - `values`: torque at the knots [N m], shape (k,) (same for every wheel) or (k, n)
+      (one column per wheel).
+    """
+
+    times: Float[Array, " k"] = eqx.field(converter=_as_float)
+    values: Float[Array, "k ..."] = eqx.field(converter=_as_float)
+
+    @classmethod
+    def uniform(cls, t1: float, values: Float[ArrayLike, "k ..."]) -> "TorqueProfile":
+        """Knots equally spaced over [0, t1] [s]; `values` [N m] of shape (k,) or (k, n)."""
+        values = jnp.asarray(values, float)
+        return cls(jnp.linspace(0.0, t1, values.shape[0]), values)
+
+    def __call__(
+        self, t: Float[ArrayLike, ""], speed: Any = None, wheel_speed: Any = None
+    ) -> Float[Array, "..."]:
+        """Torque [N m] at time t [s]: shape () or (n,).  `speed`, `wheel_speed` unused."""
+        del speed, wheel_speed
+        if self.values.ndim == 1:
+            return jnp.interp(t, self.times, self.values)
+        return jax.vmap(lambda col: jnp.interp(t, self.times, col), in_axes=1)(self.values)
+
+
+class Trajectory(eqx.Module):
+    """Result of `simulate_longitudinal`: the state and wheel forces at the saved times.
+
+    Shapes: (s,) or (s, n) for s saved times and n wheels.
+
+    - `time` [s]; `speed` v [m/s]; `distance` x [m]; `wheel_speed` omega [rad/s].
+    - `slip`: slip i [-] each wheel's contact was evaluated at (`wheel_kinematics`).
+    - `sinkage`: z0 (4.15) [m]; `entry_angle` theta0 [rad].
+    - `drawbar_pull`: longitudinal force of each wheel, eq. (2.10), regularised [N];
+      their sum is m dv/dt.
+    - `resisting_torque`: M_w (2.12), regularised [N m]; `applied_torque` T [N m].
+    - `status`: `Status` of each wheel's equilibrium (int32).  Rows after a failed time
+      step (see `result`) hold inf states and `Status.INVALID_INPUT`.
+    - `result`: `diffrax.RESULTS` of the time integration (successful unless an implicit
+      step's Newton iteration failed).
+    """
+
+    time: Float[Array, " s"]
+    speed: Float[Array, " s"]
+    distance: Float[Array, " s"]
+    wheel_speed: Float[Array, "s n"]
+    slip: Float[Array, "s n"]
+    sinkage: Float[Array, "s n"]
+    entry_angle: Float[Array, "s n"]
+    drawbar_pull: Float[Array, "s n"]
+    resisting_torque: Float[Array, "s n"]
+    applied_torque: Float[Array, "s n"]
+    status: Int[Array, "s n"]
+    result: diffrax.RESULTS
+
+
+def _torque_at(torque, t, speed, wheel_speed):
+    value = torque(t, speed, wheel_speed) if callable(torque) else torque
+    return jnp.broadcast_to(jnp.asarray(value, wheel_speed.dtype), wheel_speed.shape)
+
+
+def _check_profile(profile, n):
+    times, values = profile.times, profile.values
+    if (
+        times.ndim != 1
+        or values.shape[:1] != times.shape
+        or values.ndim > 2
+        or (values.ndim == 2 and values.shape[1] != n)
+    ):
+        raise ValueError(
+            "TorqueProfile: times must have shape (k,) and values (k,) or (k, num_wheels);"
+            f" got {times.shape} and {values.shape} for {n} wheels"
+        )
+    if not _is_traced(times) and not np.all(np.diff(np.asarray(times, dtype=float)) > 0):
+        raise ValueError("TorqueProfile: times must be strictly increasing")
