@@ -14,15 +14,19 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
 import pytest
 from scipy.optimize import curve_fit
 
 import snowjax as sj
 from snowjax._cli import app as _cli
+from snowjax._fit import core as _core
 from snowjax._fit import wheel as _fit
 from tests.notebook_runner import outputs_text, run_notebook
 
@@ -173,8 +177,15 @@ def test_reece_two_plate_sizes_recovers_dimensionless_moduli():
         (dict(plate_size=None), "needs plate_size"),
         (dict(plate_size=-0.2), "plate_size must be > 0"),
         (dict(sinkage=np.ones((4, 5))), "one-dimensional"),
+        # Values whose squares overflow float64 would make the fit's arithmetic inf/NaN.
+        (dict(sinkage=np.r_[0.01, 1e300, np.linspace(0.02, 0.2, 18)]),
+         r"sinkage = 1e\+300 at index 1 is too large for the float64 arithmetic"),
+        (dict(max_steps=0), "max_steps must be an integer >= 1"),
+        (dict(max_steps=True), "max_steps must be an integer >= 1"),
+        (dict(cohesion=1e3), "cohesion only applies to law='reece'"),
+        (dict(law="reece", unit_weight=2e3), "need two or more plate sizes"),
     ],
-)
+)  # fmt: skip
 def test_fit_plate_sinkage_rejects_bad_input(kwargs, match):
     d = sj.thesis_plate_test()
     args = dict(sinkage=d["sinkage"], pressure=d["pressure"], law="bekker", plate_size=0.23)
@@ -186,6 +197,76 @@ def test_fit_plate_sinkage_rejects_bad_input(kwargs, match):
 def test_fit_plate_sinkage_needs_more_points_than_parameters():
     with pytest.raises(ValueError, match="needs more than 2 points"):
         sj.fit_plate_sinkage([0.1, 0.2], [1e3, 2e3], "bekker", 0.2)
+
+
+def test_fit_plate_sinkage_in_tiny_units_is_finite_and_silent():
+    """Data of order 1e-300 (in range, but their squares underflow): the residual scale
+    and the covariance are computed scaled, so the fit neither refuses the pressures as
+    'all zero' nor warns about a division by zero."""
+    d = sj.thesis_plate_test()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)
+        res = sj.fit_plate_sinkage(d["sinkage"], 1e-300 * d["pressure"], "bekker", 0.23)
+    assert res.params["n"] == pytest.approx(THESIS_N, abs=2e-7)  # n does not see the unit
+    assert 0 < res.stderr["n"] < 0.1
+
+
+# ---------------------------------------------------------------------------------------
+# The least-squares core: failures are errors, never a result
+# ---------------------------------------------------------------------------------------
+
+
+class _ToyResidual(eqx.Module):
+    """r(u) = u - 1 (two residuals per variable); NaN everywhere, NaN beyond a wall at
+    u = 0.5 (the optimum u = 1 lies beyond it) or a NaN linear solve on request."""
+
+    mode: str = eqx.field(static=True)
+
+    def __call__(self, u, args):
+        r = jnp.concatenate([u - 1.0, u - 1.0])
+        if self.mode == "wall":
+            return jnp.where(jnp.concatenate([u, u]) < 0.5, r, jnp.nan), None
+        if self.mode == "nan":
+            return r * jnp.nan, None
+        if self.mode == "solve":  # a model whose own linear solve meets a NaN operator
+            op = lx.DiagonalLinearOperator(jnp.full(r.shape, jnp.nan))
+            return lx.linear_solve(op, r).value, None
+        return r, None
+
+
+def test_least_squares_keeps_non_finite_residuals_from_the_solver():
+    """A model that is NaN everywhere: the solver sees a finite penalty (no lineax error),
+    the Solution marks the residuals NaN, and building a result from it is an error."""
+    sol = _core.least_squares(_ToyResidual("nan"), jnp.zeros(2), None, max_steps=5, tol=1e-10)
+    assert np.isnan(sol.residual).all() and np.isfinite(sol.jacobian).all()
+    with pytest.raises(ValueError, match="4 of 4 residuals are not finite"):
+        _core.estimate(sol.jacobian, sol.residual, ["a", "b"], sol.u, np.eye(2), fitted=["a", "b"])
+    with pytest.raises(ValueError, match="sum of squared residuals is nan"):
+        _core.fit_result(sol, [], residuals=sol.residual, warnings=[], units={}, info={})
+
+
+def test_least_squares_steps_back_from_non_finite_residuals():
+    """Steps into the region where the model is NaN are rejected: the fit stops at the
+    wall (u < 0.5) with finite residuals instead of failing in a linear solve."""
+    sol = _core.least_squares(_ToyResidual("wall"), jnp.zeros(2), None, max_steps=50, tol=1e-10)
+    assert np.isfinite(sol.residual).all()
+    assert (sol.u < 0.5).all() and (sol.u > 0.3).all()
+
+
+def test_least_squares_turns_a_non_finite_linear_solve_into_a_value_error(capsys):
+    with pytest.raises(_core.NonFiniteModelError, match="non-finite values"):
+        _core.least_squares(_ToyResidual("solve"), jnp.zeros(2), None, max_steps=5, tol=1e-10)
+    err = capsys.readouterr().err
+    assert "Traceback" not in err and "pure_callback" not in err
+
+
+def test_estimate_needs_as_many_valid_residuals_as_parameters():
+    jac, r = np.ones((2, 3)), np.zeros(2)
+    with pytest.raises(ValueError, match=r"2 valid residual\(s\) for 3 fitted parameter\(s\)"):
+        _core.estimate(jac, r, ["a", "b", "c"], np.ones(3), np.eye(3), fitted=["a", "b", "c"])
+    for bad in (0, -3, 2.5, True):
+        with pytest.raises(ValueError, match="max_steps must be an integer >= 1"):
+            _core.check_max_steps(bad)
 
 
 # ---------------------------------------------------------------------------------------
@@ -322,6 +403,13 @@ def test_fit_tire_coefficients_partial_and_bad_input():
         sj.fit_tire_coefficients(t["load_kN"], None, None, np.r_[np.nan, t["mux"][1:]], None, None)
     with pytest.raises(ValueError, match="at least one"):
         sj.fit_tire_coefficients(t["load_kN"], None, None, None, None, None)
+    # Each value below 1.3e154, but the sum of their squares overflows float64.
+    with pytest.raises(ValueError, match=r"cs = 1e\+154 at index 0 is too large"):
+        sj.fit_tire_coefficients(t["load_kN"], np.full(4, 1e154), None, None, None, None)
+    with pytest.raises(ValueError, match=r"cs = 1e\+308 at index 1 is too large"):
+        sj.fit_tire_coefficients(t["load_kN"], np.r_[5.0, 1e308, 5.0, 6.0], None, None, None, None)
+    with pytest.raises(ValueError, match="max_steps must be an integer >= 1"):
+        sj.fit_tire_coefficients(t["load_kN"], t["cs"], None, None, None, None, max_steps=-3)
 
 
 # ---------------------------------------------------------------------------------------
@@ -488,6 +576,8 @@ def test_failed_equilibria_get_a_finite_penalty_without_gradient():
         (dict(load=-LOADS), "load must be > 0"),
         (dict(scale={"drawbar_pull": 1.0}), "not measured"),
         (dict(shear="elastic"), "shear must be"),
+        (dict(max_steps=0), "max_steps must be an integer >= 1"),
+        (dict(load=np.r_[1e200, LOADS[1:]]), r"load = 1e\+200 at index 0 is too large"),
     ],
 )
 def test_fit_wheel_rejects_bad_input(kwargs, match):
@@ -497,6 +587,18 @@ def test_fit_wheel_rejects_bad_input(kwargs, match):
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         sj.fit_wheel(**args)
+
+
+@pytest.mark.parametrize("z_w", [2.0, 10.0])
+def test_fit_wheel_without_equilibria_is_an_error(round_trip, z_w):
+    """Snow deeper than the wheel can sink into (z_w of 2.7 and 13.6 wheel diameters):
+    at these loads no point has an equilibrium (ENTRY_ANGLE_LIMIT) and the fit can do
+    nothing.  That is an error naming the count, not a 'converged' result with an SSE of
+    0 and -3 degrees of freedom, nor a lineax error from a NaN derivative of the
+    equilibrium (what the model gives at z_w = 10 m)."""
+    data, _ = round_trip
+    with pytest.raises(ValueError, match="12 of 12 data points have no equilibrium"):
+        sj.fit_wheel(WHEEL, _snow(**{**START, "z_w": z_w}), LOADS, SLIPS, fit=FITTED, **data)
 
 
 # ---------------------------------------------------------------------------------------

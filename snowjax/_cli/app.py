@@ -3,6 +3,10 @@
 Each subcommand lives in its own module of this package with a `register(subparsers)`
 function that adds its parser and sets `run`, the function called with the parsed
 arguments (it returns the exit code).  Modules import JAX lazily so `--help` is fast.
+
+An expected failure (a bad option, file or value) is one line on stderr and exit status
+2: usage errors included (`_Parser`).  NumPy's floating-point `RuntimeWarning`s are not
+shown: every command reports non-finite results itself (a status, an error message).
 """
 
 from __future__ import annotations
@@ -10,6 +14,7 @@ from __future__ import annotations
 import argparse
 import re
 import sys
+import warnings
 
 from . import fit, reproduce, sweep, validate
 
@@ -36,8 +41,17 @@ def _attach_negative_values(argv: list[str]) -> list[str]:
     return out
 
 
+class _Parser(argparse.ArgumentParser):
+    """An argument parser whose usage errors are one line: the problem and where to find
+    help (argparse's default prints the whole usage first).  Subcommand parsers inherit
+    it."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="snowjax",
         description="Differentiable wheel-on-snow terramechanics (Sankapalli 2004).",
     )
@@ -45,7 +59,9 @@ def main(argv: list[str] | None = None) -> int:
     for module in _SUBCOMMANDS:
         module.register(sub)
     args = parser.parse_args(_attach_negative_values(sys.argv[1:] if argv is None else argv))
-    return int(args.run(args))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        return int(args.run(args))
 
 
 if __name__ == "__main__":  # pragma: no cover

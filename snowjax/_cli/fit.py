@@ -24,7 +24,11 @@ ignored.  Column names (SI units unless stated):
 Output: a table (or `--json`: params, stderr, units, sse, residuals, warnings,
 correlation, condition_number, dof, success, num_steps).  A malformed file (missing
 column, text in a number, empty file, NaN, wrong field count, value out of range) prints
-one message naming the file, the line and the problem, and exits with status 2.
+one message naming the file, the line and the problem, and exits with status 2; so do a
+fit that fails (no finite SSE, fewer valid points than parameters) and options that would
+do nothing (`--plate-size` with `--law wong` or a `plate_size_m` column, `--cohesion` /
+`--unit-weight` without `--law reece`).  A UTF-8 byte-order mark is accepted; the two
+pressure columns together are refused.
 JAX is imported lazily, inside `run`, and runs in float64.
 """
 
@@ -55,6 +59,13 @@ _RANGES = {
 }
 
 
+# Columns that give the same quantity in different units: a file may hold only one of each.
+_ALIASES = (("pressure_Pa", "pressure_kPa"),)
+# The largest magnitude whose square is finite in float64 (about 1.34e154): larger values
+# overflow the fits' arithmetic (squares, powers).
+_MAX_MAGNITUDE = math.sqrt(sys.float_info.max)
+
+
 class DataError(Exception):
     """A malformed data file; the message names the file, the line and the problem."""
 
@@ -66,12 +77,14 @@ def read_csv(path, required, optional=(), one_of=()) -> dict:
     - `optional`: columns read when present.
     - `one_of`: groups (tuples); at least one column of each group must be present.
 
-    Returns a dict column -> list of floats (only the columns asked for and present).
-    Raises `DataError`.
+    A UTF-8 byte-order mark (as spreadsheet programs write) is accepted.  Two columns of
+    `_ALIASES` (the same quantity in two units) are refused, as are values whose square
+    overflows float64.  Returns a dict column -> list of floats (only the columns asked
+    for and present).  Raises `DataError`.
     """
     path = pathlib.Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = path.read_text(encoding="utf-8-sig")
     except OSError as e:
         raise DataError(f"{path}: cannot read the file ({e.strerror or e})") from None
     except UnicodeDecodeError:
@@ -97,6 +110,14 @@ def read_csv(path, required, optional=(), one_of=()) -> dict:
             f"{', '.join(repr(m) for m in missing)}; expected columns: {expected}; "
             f"found: {', '.join(names)}"
         )
+    for group in _ALIASES:
+        both = [c for c in group if c in names]
+        if len(both) > 1:
+            raise DataError(
+                f"{path}: line {header_line} (header): columns "
+                f"{' and '.join(repr(c) for c in both)} give the same quantity in different "
+                "units; keep one of them"
+            )
     known = set(required) | set(optional) | {c for g in one_of for c in g}
     wanted = [c for c in names if c in known]
     cols = {c: [] for c in wanted}
@@ -118,6 +139,11 @@ def read_csv(path, required, optional=(), one_of=()) -> dict:
                 raise DataError(f"{where}, column {c!r}: {raw!r} is not a number") from None
             if not math.isfinite(x):
                 raise DataError(f"{where}, column {c!r}: {raw!r} is not a finite number")
+            if abs(x) >= _MAX_MAGNITUDE:
+                raise DataError(
+                    f"{where}, column {c!r}: {raw} is too large for float64 arithmetic (its "
+                    f"square overflows; keep values well below {_MAX_MAGNITUDE:.3g})"
+                )
             if c in _RANGES and not _RANGES[c][0](x):
                 raise DataError(
                     f"{where}, column {c!r}: {raw} is out of range (must be {_RANGES[c][1]})"
@@ -265,6 +291,9 @@ def run(args) -> int:
     """Run `snowjax fit <kind>`; returns the exit code (0 ok, 2 bad data or arguments)."""
     kind = getattr(args, "fit_kind", None)
     path = args.data
+    unused = _unused_options(kind, args)
+    if unused:
+        return _fail(unused)
     try:
         if kind == "plate":
             cols = read_csv(
@@ -303,6 +332,11 @@ def run(args) -> int:
             else:
                 pressure = 1e3 * np.array(cols["pressure_kPa"])
             if "plate_size_m" in cols:
+                if args.plate_size is not None:
+                    return _fail(
+                        f"{path}: --plate-size and the plate_size_m column both give the plate "
+                        "size; keep one of them"
+                    )
                 size = np.array(cols["plate_size_m"])
             else:
                 size = args.plate_size
@@ -347,6 +381,24 @@ def run(args) -> int:
         print(f"data: {path}")
         print(result.table())
     return 0
+
+
+def _unused_options(kind, args) -> str | None:
+    """The message for options that would do nothing in this combination (None if none)."""
+    if kind == "plate":
+        if args.law == "wong" and args.plate_size is not None:
+            return "--plate-size is not used by --law wong (Wong's law (2.3) has no plate size)"
+        reece_only = [f"--{o}" for o, v in (("cohesion", args.cohesion),
+                      ("unit-weight", args.unit_weight)) if v is not None]  # fmt: skip
+        if reece_only and args.law != "reece":
+            verb = "applies" if len(reece_only) == 1 else "apply"
+            return (
+                f"{' and '.join(reece_only)} only {verb} with --law reece (for its k'_c, "
+                f"k'_phi); got --law {args.law}"
+            )
+    if kind == "wheel" and args.max_steps < 1:
+        return f"--max-steps must be >= 1 (Levenberg-Marquardt steps), got {args.max_steps}"
+    return None
 
 
 def _wheel_model(args):

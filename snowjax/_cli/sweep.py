@@ -9,7 +9,9 @@ Value lists are `start:stop:num` (like `numpy.linspace`), a comma list, or one v
 By default the sweep is the grid parameter sets x loads x slips; parameter options
 given as lists are zipped into parameter sets (equal lengths, or one value), or
 combined into every combination with `--param-grid`.  `--list` zips loads, slips and
-parameter lists instead of the grid (one point each).
+parameter lists instead of the grid (one point each).  Options that would do nothing are
+refused: `--param-grid` with `--list` or without a parameter list, `--coordinator`,
+`--num-processes` and `--process-id` without `--distributed`.
 
 Terrains (`--terrain`, SI units):
   wong     WongSnow: --p-w [Pa] --z-w [m] --cohesion [Pa] --tan-phi [-]
@@ -241,6 +243,10 @@ def _build(args):
             raise ValueError(f"--set {item!r}: {name} is given twice")
         given[f"set:{name}"] = ("terrain", name, _values(text, "set " + name), f"--set {name}")
     multi = [k for k, v in given.items() if v[2].size > 1]
+    if args.param_grid and not multi:
+        raise ValueError(
+            "--param-grid combines parameter lists, but no parameter option has more than one value"
+        )
     if args.param_grid and not args.list:
         # Every combination of the parameter lists (first option slowest).
         combos = np.array(list(itertools.product(*(given[k][2] for k in multi))))
@@ -374,8 +380,24 @@ def _only(given, cls, options, kind, leaves=None):
         )
 
 
+def _unused_options(args) -> None:
+    """Refuse options that would do nothing in this combination (ValueError naming them)."""
+    if args.list and args.param_grid:
+        raise ValueError(
+            "--param-grid does nothing with --list (--list zips loads, slips and parameter"
+            " lists point by point); use one of them"
+        )
+    cluster = [f"--{o}" for o, v in (("coordinator", args.coordinator),
+               ("num-processes", args.num_processes), ("process-id", args.process_id))
+               if v is not None]  # fmt: skip
+    if cluster and not args.distributed:
+        verb = "applies" if len(cluster) == 1 else "apply"
+        raise ValueError(f"{', '.join(cluster)} only {verb} with --distributed")
+
+
 def run(args) -> int:
     try:
+        _unused_options(args)
         if args.chunk_size < 1:
             raise ValueError(f"--chunk-size must be a positive integer, got {args.chunk_size}")
         if not args.out.strip():

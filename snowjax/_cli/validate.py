@@ -11,7 +11,9 @@ predicted_vs_measured.png.  JAX is imported lazily and runs in float64.
 
 from __future__ import annotations
 
+import math
 import pathlib
+import sys
 
 
 def register(sub) -> None:
@@ -49,9 +51,27 @@ def register(sub) -> None:
     p.set_defaults(run=run, parser=p)
 
 
+def _fail(message: str) -> int:
+    print(f"snowjax validate: error: {message}", file=sys.stderr)
+    return 2
+
+
 def run(args) -> int:
-    """Run the validation; print the table and the path of report.md."""
+    """Run the validation; print the table and the path of report.md (exit code 0; 2 for
+    a bad option, with one line on stderr)."""
     import time
+
+    from .reproduce import _output_dir
+
+    load, width = args.wheel_load, args.tyre_width
+    if load is not None and not (math.isfinite(load) and load > 0):
+        return _fail(f"--wheel-load must be a finite number > 0 (newtons), got {load}")
+    if width is not None and not (math.isfinite(width) and 0 < width < 2):
+        return _fail(f"--tyre-width must be in (0, 2) metres, got {width}")
+    try:
+        args.out = _output_dir(str(args.out))
+    except ValueError as err:
+        return _fail(str(err))
 
     import jax
 
@@ -65,12 +85,8 @@ def run(args) -> int:
         validate,
     )
 
-    load = DEFAULT_WHEEL_LOAD if args.wheel_load is None else args.wheel_load
-    width = DEFAULT_TYRE_WIDTH if args.tyre_width is None else args.tyre_width
-    if not load > 0:
-        args.parser.error("--wheel-load must be > 0 (newtons)")
-    if not 0 < width < 2:
-        args.parser.error("--tyre-width must be in (0, 2) metres")
+    load = DEFAULT_WHEEL_LOAD if load is None else load
+    width = DEFAULT_TYRE_WIDTH if width is None else width
     console = Console()
     start = time.perf_counter()
     result = validate(

@@ -22,6 +22,16 @@ elsewhere) are transformed back by the delta method, `Cov(θ) = D Cov(u) Dᵀ` w
 standard errors as a direct fit at the same optimum (`se(θ) = θ · se(ln θ)`).  Derived
 parameters (a combined modulus, a dimensionless one) are further rows of D.
 
+**Failures.**  The solver never sees a non-finite number from the model: a residual that
+is NaN or inf at an iterate is replaced by a constant penalty (`NONFINITE_RESIDUAL`, 1e3,
+zero gradient; the residuals of every fit are scaled to order one), so Levenberg–Marquardt
+rejects a step into a region where the model cannot be evaluated and can start in one,
+and a non-finite derivative becomes a zero Jacobian entry.  A fit that still ends without
+a usable optimum raises a `ValueError` instead of returning a result: a residual that is
+not finite at the end (a non-finite SSE), fewer valid residuals than fitted parameters in
+a block, or a model whose own linear solves received non-finite values
+(`NonFiniteModelError`).
+
 **Warnings** (in `FitResult.warnings`): a parameter whose standard error exceeds its
 magnitude; a pair of fitted parameters with |correlation| > 0.95; a column-scaled
 Jacobian with condition number > 1e4; a singular Jacobian (not identifiable); no degrees
@@ -32,7 +42,9 @@ wheel equilibria).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import logging
 import math
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any, NamedTuple
@@ -52,11 +64,14 @@ __all__ = [
     "Transform",
     "Solution",
     "Estimate",
+    "NonFiniteModelError",
     "least_squares",
+    "check_max_steps",
     "estimate",
     "fit_result",
     "CORRELATION_LIMIT",
     "CONDITION_LIMIT",
+    "NONFINITE_RESIDUAL",
 ]
 
 # Diagnostic thresholds (documented in the module docstring).
@@ -64,6 +79,10 @@ CORRELATION_LIMIT = 0.95
 CONDITION_LIMIT = 1e4
 # A singular value below this fraction of the largest one counts as zero.
 _RANK_TOL = 1e-10
+# Residual given to a non-finite model value at an iterate (constant, zero gradient): far
+# above the residuals of the fits, which are scaled to order one, so a step that makes a
+# value non-finite always raises the loss and is rejected.
+NONFINITE_RESIDUAL = 1e3
 
 
 # ---------------------------------------------------------------------------------------
@@ -285,18 +304,58 @@ class Transform(NamedTuple):
 # ---------------------------------------------------------------------------------------
 
 
-def _least_squares_impl(residual, max_steps, tol, u0, args):
-    """Levenberg–Marquardt on `residual(u, args) -> (r, aux)`.
+@jax.custom_vjp
+def _finite_cotangent(x):
+    """Identity whose backward pass replaces non-finite cotangents by 0.
 
-    Returns the optimum u, and r, J = ∂r/∂u and aux *at that optimum* (the solver's last
-    accepted state, so no second trace of the model is needed).  The Jacobian is
-    materialised by reverse mode (`jac="bwd"`): with forward mode optimistix evaluates
-    its zero-initialised linearisation on the first step, which makes the implicit JVP
-    of a nested root find (the wheel equilibrium) see a zero operator.
+    A derivative the model cannot provide (e.g. the wheel's with respect to z_w once z_w
+    exceeds the wheel diameter, where the base angle arccos(1 − 2 z_w/D) is clipped)
+    then shows up as a zero Jacobian column — "not identifiable" in the diagnostics —
+    instead of a NaN that would stop the Levenberg–Marquardt linear solves.
+    """
+    return x
+
+
+def _finite_cotangent_fwd(x):
+    return x, None
+
+
+def _finite_cotangent_bwd(_, ct):
+    return (jnp.where(jnp.isfinite(ct), ct, 0.0),)
+
+
+_finite_cotangent.defvjp(_finite_cotangent_fwd, _finite_cotangent_bwd)
+
+
+def _guarded(residual):
+    """`residual` with finite values and derivatives: (r, aux) -> (r', (aux, finite)).
+
+    r' is r where it is finite and `NONFINITE_RESIDUAL` (no gradient) elsewhere;
+    `finite` marks the residuals that were finite.  Non-finite entries of the gradient
+    with respect to u become 0 (`_finite_cotangent`).
+    """
+
+    def fn(u, args):
+        r, aux = residual(_finite_cotangent(u), args)
+        finite = jnp.isfinite(r)
+        return jnp.where(finite, r, NONFINITE_RESIDUAL), (aux, finite)
+
+    return fn
+
+
+def _least_squares_impl(residual, max_steps, tol, u0, args):
+    """Levenberg–Marquardt on `residual(u, args) -> (r, aux)`, guarded by `_guarded`.
+
+    Returns the optimum u, and r, J = ∂r/∂u, aux and the mask of finite residuals *at
+    that optimum* (the solver's last accepted state, so no second trace of the model is
+    needed).  The Jacobian is materialised by reverse mode (`jac="bwd"`): with forward
+    mode optimistix evaluates its zero-initialised linearisation on the first step, which
+    makes the implicit JVP of a nested root find (the wheel equilibrium) see a zero
+    operator.
     """
     solver = optx.LevenbergMarquardt(rtol=tol, atol=tol)
     sol = optx.least_squares(
-        residual,
+        _guarded(residual),
         solver,
         u0,
         args,
@@ -306,11 +365,13 @@ def _least_squares_impl(residual, max_steps, tol, u0, args):
         throw=False,
     )
     state = sol.state
+    aux, finite = state.aux
     return (
         sol.value,
         state.f_info.residual,
         state.f_info.jac.as_matrix(),
-        state.aux,
+        aux,
+        finite,
         sol.result == optx.RESULTS.successful,
         sol.stats["num_steps"],
     )
@@ -334,7 +395,8 @@ _least_squares_default = jax.jit(_least_squares_impl, static_argnums=(0, 1, 2))
 class Solution:
     """The optimum of a least-squares problem, as NumPy values.
 
-    - `u`: fitted variables; `residual`: r(u); `jacobian`: J = ∂r/∂u (m × p).
+    - `u`: fitted variables; `residual`: r(u), NaN where the model was not finite;
+      `jacobian`: J = ∂r/∂u (m × p).
     - `aux`: the residual function's auxiliary output at u (NumPy leaves).
     - `converged`: whether Levenberg–Marquardt met its tolerance; `num_steps`, `max_steps`.
     """
@@ -359,6 +421,47 @@ class Solution:
         ]
 
 
+class NonFiniteModelError(ValueError):
+    """The model's own linear solves (a nested root find's implicit derivative) received
+    NaN or inf during a fit, so Levenberg–Marquardt could not continue."""
+
+
+class _DropCallbackFailures(logging.Filter):
+    """Drops JAX's log record of a failed host callback (the traceback it prints)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        return "pure_callback failed" not in record.getMessage()
+
+
+@contextlib.contextmanager
+def _quiet_callback_failures():
+    """Inside: a failing `error_if` callback raises without JAX also logging its traceback.
+
+    The error itself still propagates (with the callback's message); `least_squares`
+    turns the expected one (non-finite model values) into a `NonFiniteModelError`.
+    """
+    logger = logging.getLogger("jax._src.callback")
+    drop = _DropCallbackFailures()
+    logger.addFilter(drop)
+    try:
+        yield
+    finally:
+        logger.removeFilter(drop)
+
+
+def check_max_steps(max_steps) -> int:
+    """`max_steps` as an int >= 1, or a ValueError naming it (a bool is not a count)."""
+    if isinstance(max_steps, (bool, np.bool_)) or not isinstance(max_steps, (int, np.integer)):
+        raise ValueError(
+            f"max_steps must be an integer >= 1 (Levenberg-Marquardt steps), got {max_steps!r}"
+        )
+    if max_steps < 1:
+        raise ValueError(
+            f"max_steps must be an integer >= 1 (Levenberg-Marquardt steps), got {max_steps}"
+        )
+    return int(max_steps)
+
+
 def least_squares(
     residual: Callable[[Any, Any], tuple[Any, Any]],
     u0,
@@ -371,19 +474,39 @@ def least_squares(
 
     `residual` is a hashable callable (an `equinox.Module` with static fields): it is a
     static argument of the compiled solver, so each distinct residual — and each new
-    shape of `u0` and `args` — compiles once.
+    shape of `u0` and `args` — compiles once.  Non-finite residuals and derivatives are
+    kept away from the solver (see the module docstring); the returned `residual` is NaN
+    where the model was not finite at the optimum.
+
+    **Raises:** `ValueError` for `max_steps` < 1; `NonFiniteModelError` (a `ValueError`)
+    when the model's own linear solves received non-finite values.
     """
+    steps_limit = check_max_steps(max_steps)
     fn = _least_squares_cpu if jax.default_backend() == "cpu" else _least_squares_default
-    u, r, jac, aux, ok, steps = fn(residual, int(max_steps), float(tol), u0, args)
+    try:
+        with _quiet_callback_failures():
+            u, r, jac, aux, finite, ok, steps = jax.block_until_ready(
+                fn(residual, steps_limit, float(tol), u0, args)
+            )
+    except (RuntimeError, ValueError) as err:
+        # lineax's error_if inside the compiled solve: a JaxRuntimeError, or a plain
+        # ValueError with the same text when the executable was already compiled.
+        if "non-finite" not in str(err):
+            raise
+        raise NonFiniteModelError(
+            "the model gave non-finite values (NaN or inf) to one of its own linear solves "
+            "during the fit, so Levenberg-Marquardt could not continue: the start values "
+            "or the data are outside the range where the model can be evaluated"
+        ) from None
     to_np = lambda x: np.asarray(x, dtype=float)
     return Solution(
         u=to_np(u),
-        residual=to_np(r),
+        residual=np.where(np.asarray(finite, bool), to_np(r), np.nan),
         jacobian=to_np(jac),
         aux=jax.tree_util.tree_map(np.asarray, aux),
         converged=bool(ok),
         num_steps=int(steps),
-        max_steps=int(max_steps),
+        max_steps=steps_limit,
     )
 
 
@@ -401,15 +524,27 @@ class _Uncertainty:
     unidentified: np.ndarray  # bool per fitted variable
 
 
+def _norms(a: np.ndarray) -> np.ndarray:
+    """2-norms of the columns of `a`, scaled by their largest entry so that squaring
+    neither underflows nor overflows (residuals of 1e-300 Pa have a norm, not 0)."""
+    top = np.max(np.abs(a), axis=0) if a.shape[0] else np.zeros(a.shape[1:])
+    safe = np.where(top > 0, top, 1.0)
+    return top * np.linalg.norm(a / safe, axis=0)
+
+
 def _gauss_newton_covariance(jac: np.ndarray, residual: np.ndarray) -> _Uncertainty:
-    """`s² (JᵀJ)⁻¹`, s² = SSE/(m − p), via the SVD of J with unit-norm columns."""
+    """`s² (JᵀJ)⁻¹`, s² = SSE/(m − p), via the SVD of J with unit-norm columns.
+
+    Computed as `(s / |J_i|)(s / |J_j|) (J_sᵀJ_s)⁻¹_ij` with J_s the column-normalised J,
+    so residuals and Jacobians in tiny or huge units do not underflow or overflow.
+    """
     m, p = jac.shape
     dof = m - p
-    sse = float(np.sum(residual**2))
-    s2 = sse / dof if dof > 0 else float("nan")
+    s = float(_norms(residual.reshape(-1, 1))[0]) / math.sqrt(dof) if dof > 0 else math.nan
+    s2 = s * s
     bad_col = ~np.isfinite(jac).all(axis=0)  # a derivative the model could not provide
     jac = np.where(np.isfinite(jac), jac, 0.0)
-    norms = np.linalg.norm(jac, axis=0)
+    norms = _norms(jac)
     zero_col = ~(norms > 0) | bad_col
     safe = np.where(zero_col, 1.0, norms)
     js = jac / safe
@@ -423,7 +558,8 @@ def _gauss_newton_covariance(jac: np.ndarray, residual: np.ndarray) -> _Uncertai
     # Variables with a component in the (numerical) null space are not identifiable.
     null = vt[small] if small.any() else np.zeros((0, p))
     unidentified = zero_col | (np.abs(null) > 1e-8).any(axis=0)
-    cov_u = s2 * cov_scaled / np.outer(safe, safe)
+    w = s / safe
+    cov_u = cov_scaled * np.outer(w, w)
     cov_u[unidentified, :] = np.inf
     cov_u[:, unidentified] = np.inf
     return _Uncertainty(cov_u=cov_u, cond=cond, dof=dof, s2=s2, unidentified=unidentified)
@@ -439,7 +575,7 @@ def _propagate(unc: _Uncertainty, dtheta_du: np.ndarray, held: np.ndarray):
     finite = ~unc.unidentified
     cf = cov_u[np.ix_(finite, finite)]
     df = d[:, finite]
-    with np.errstate(invalid="ignore"):
+    with np.errstate(invalid="ignore", over="ignore"):  # inf: an error too large for float64
         cov = df @ cf @ df.T
     # A parameter that depends on an unidentifiable variable has an infinite error.
     depends_bad = (np.abs(d[:, ~finite]) > 0).any(axis=1)
@@ -541,8 +677,12 @@ def estimate(
     - `held`: bool per parameter held at a bound: `nan` standard error and correlations.
     - `prefix`: put before every diagnostic (e.g. the equation of a tire load function).
     - `notes`: model warnings that come before the diagnostics.
+
+    **Raises:** `ValueError` when a residual is not finite (the SSE would be NaN or inf)
+    or there are fewer residuals than fitted variables (p).
     """
     names = tuple(names)
+    _check_usable(np.asarray(residual, dtype=float), np.shape(jac)[1], prefix)
     vals = np.asarray(values, dtype=float)
     held_mask = np.zeros(len(names), bool) if held is None else np.asarray(held, bool)
     unc = _gauss_newton_covariance(jac, residual)
@@ -558,6 +698,23 @@ def estimate(
         dof=unc.dof,
         warnings=[*notes, *diagnostics],
     )
+
+
+def _check_usable(residual: np.ndarray, p: int, prefix: str = "") -> None:
+    """A ValueError unless every residual is finite and there are at least `p` of them."""
+    pre = f"{prefix}: " if prefix else ""
+    m = residual.size
+    bad = int(np.sum(~np.isfinite(residual)))
+    if bad:
+        raise ValueError(
+            f"{pre}the fit failed: {bad} of {m} residuals are not finite (NaN or inf) at the "
+            "end of the fit, so the sum of squared residuals is not finite"
+        )
+    if m < p:
+        raise ValueError(
+            f"{pre}the fit failed: {m} valid residual(s) for {p} fitted parameter(s); a fit "
+            "needs at least as many valid data as parameters"
+        )
 
 
 def _block_diag(blocks: Sequence[np.ndarray]) -> np.ndarray:
@@ -586,14 +743,20 @@ def fit_result(
     and correlation zero between blocks, the largest condition number and the fewest
     degrees of freedom.  `warnings` come first (the model's, with `solution.warnings`
     where the model places them), then each block's.  `sse` is Σ `residuals`².
+
+    **Raises:** `ValueError` when the SSE is not finite.
     """
+    with np.errstate(over="ignore", invalid="ignore"):
+        sse = float(np.sum(residuals**2))
+    if not math.isfinite(sse):
+        raise ValueError(f"the fit failed: the sum of squared residuals is {sse}")
     names = [n for part in parts for n in part.names]
     values = [float(v) for part in parts for v in part.values]
     stderr = [float(s) for part in parts for s in part.stderr]
     return FitResult(
         params=dict(zip(names, values)),
         stderr=dict(zip(names, stderr)),
-        sse=float(np.sum(residuals**2)),
+        sse=sse,
         residuals=residuals,
         warnings=[*warnings, *(w for part in parts for w in part.warnings)],
         units={k: units.get(k, "") for k in names},

@@ -3,12 +3,17 @@
 from __future__ import annotations
 
 import importlib.resources
+import math
+import sys
 
 import numpy as np
 
 from .._leaves import _is_traced
 
-__all__ = ["read_package_csv", "vector", "same_length"]
+__all__ = ["read_package_csv", "vector", "same_length", "rms", "MAX_MAGNITUDE"]
+
+# The largest magnitude whose square is finite in float64 (about 1.34e154).
+MAX_MAGNITUDE = math.sqrt(sys.float_info.max)
 
 
 def read_package_csv(name: str) -> dict[str, np.ndarray]:
@@ -19,7 +24,7 @@ def read_package_csv(name: str) -> dict[str, np.ndarray]:
     path = importlib.resources.files("snowjax") / "data" / name
     lines = [
         ln.strip()
-        for ln in path.read_text(encoding="utf-8").splitlines()
+        for ln in path.read_text(encoding="utf-8-sig").splitlines()
         if ln.strip() and not ln.lstrip().startswith("#")
     ]
     header = [h.strip() for h in lines[0].split(",")]
@@ -28,7 +33,12 @@ def read_package_csv(name: str) -> dict[str, np.ndarray]:
 
 
 def vector(name: str, x, *, min_size: int = 1) -> np.ndarray:
-    """A finite 1-D float array, or a ValueError naming `name` (a scalar becomes length 1)."""
+    """A finite 1-D float array, or a ValueError naming `name` (a scalar becomes length 1).
+
+    Values whose sum of squares overflows float64 (|x| of order `MAX_MAGNITUDE`, 1.3e154,
+    and above) are refused too: the fits square their data (residual scales, the SSE) and
+    raise them to powers (zⁿ), so such values would make the fit's arithmetic inf or NaN.
+    """
     if _is_traced(x):
         raise TypeError(f"{name} must be a concrete array (the fits are not traceable)")
     try:
@@ -44,7 +54,16 @@ def vector(name: str, x, *, min_size: int = 1) -> np.ndarray:
     bad = ~np.isfinite(arr)
     if bad.any():
         i = int(np.argmax(bad))
-        raise ValueError(f"{name} must be finite; got {arr[i]!r} at index {i}")
+        raise ValueError(f"{name} must be finite; got {float(arr[i])!r} at index {i}")
+    with np.errstate(over="ignore"):
+        overflow = not np.isfinite(np.sum(np.square(arr)))
+    if overflow:
+        i = int(np.argmax(np.abs(arr)))
+        raise ValueError(
+            f"{name} = {float(arr[i])!r} at index {i} is too large for the float64 arithmetic of "
+            f"the fit (the sum of the squares of {name} overflows; keep |{name}| well below "
+            f"{MAX_MAGNITUDE:.3g})"
+        )
     return arr
 
 
@@ -55,3 +74,12 @@ def same_length(**arrays: np.ndarray) -> int:
         desc = ", ".join(f"{k} has {n}" for k, n in sizes.items())
         raise ValueError(f"shape mismatch: the data arrays must have equal length ({desc})")
     return next(iter(sizes.values()))
+
+
+def rms(y: np.ndarray) -> float:
+    """The root-mean-square of `y`, sqrt(mean(y²)), in the unit of `y`, without the
+    underflow or overflow of squaring (scaled by max |y|: 1e-300 values give 1e-300, not 0)."""
+    top = float(np.max(np.abs(y))) if y.size else 0.0
+    if not top > 0:
+        return top
+    return top * math.sqrt(float(np.mean((y / top) ** 2)))

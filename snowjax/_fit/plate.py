@@ -21,8 +21,15 @@ from jaxtyping import ArrayLike, Float
 from .._terrain.bekker import BekkerSoil, bekker_pressure
 from .._terrain.reece import reece_pressure
 from .._terrain.wong import WongSnow, wong_pressure
-from .core import FitResult, Transform, estimate, fit_result, least_squares
-from .data import read_package_csv, same_length, vector
+from .core import (
+    FitResult,
+    Transform,
+    check_max_steps,
+    estimate,
+    fit_result,
+    least_squares,
+)
+from .data import read_package_csv, rms, same_length, vector
 
 __all__ = ["fit_plate_sinkage", "thesis_plate_test", "THESIS_PLATE_DIAMETER", "PLATE_LAWS"]
 
@@ -262,20 +269,32 @@ def fit_plate_sinkage(
       scalar or one value per measurement (required for Bekker and Reece).  Be explicit
       about the convention: the thesis used the 0.23 m plate *diameter* for Table 2.1
       (`thesis_plate_test`), while Bekker's convention for circular plates is the radius.
-    - `cohesion`, `unit_weight`: optional c [Pa] and γ_s [N/m³] for Reece's k'_c, k'_φ.
-    - `max_steps`: Levenberg–Marquardt step limit.
+    - `cohesion`, `unit_weight`: optional c [Pa] and γ_s [N/m³] for Reece's k'_c, k'_φ
+      (only with `law="reece"` and two or more plate sizes).
+    - `max_steps`: Levenberg–Marquardt step limit (an integer >= 1).
 
     **Returns:** a `FitResult` (residuals in Pa, SSE in Pa²).  For the wheel:
     `result.bekker_soil(cohesion, tan_phi, shear_modulus=...)` (Bekker; with one plate
     size the split of k_eq is an assumption, see `FitResult.bekker_soil`) and
     `result.wong_snow(...)` (Wong) return the terrain `solve_wheel` takes.
 
-    **Raises:** `ValueError` for an unknown law, unequal lengths, non-finite values,
-    negative sinkage, non-positive plate sizes, or too few points (more than the number
-    of parameters are needed).
+    **Raises:** `ValueError` for an unknown law, unequal lengths, non-finite values or
+    values too large for float64 arithmetic (|x| near 1e154 and above), negative
+    sinkage, non-positive plate sizes, too few points (more than the number of
+    parameters are needed), `cohesion` / `unit_weight` where they do not apply, or a fit
+    that ends without a finite SSE.
     """
     if law not in PLATE_LAWS:
         raise ValueError(f"law must be one of {PLATE_LAWS}, got {law!r}")
+    max_steps = check_max_steps(max_steps)
+    reece_only = [
+        nm for nm, v in (("cohesion", cohesion), ("unit_weight", unit_weight)) if v is not None
+    ]
+    if reece_only and law != "reece":
+        raise ValueError(
+            f"{' and '.join(reece_only)} only {'applies' if len(reece_only) == 1 else 'apply'}"
+            f" to law='reece' (for its k'_c, k'_phi); got law={law!r}"
+        )
     z = vector("sinkage", sinkage)
     p = vector("pressure", pressure)
     m = same_length(sinkage=z, pressure=p)
@@ -297,13 +316,18 @@ def fit_plate_sinkage(
             raise ValueError(f"plate_size must be > 0 m; got {b[i]!r} at index {i}")
         sizes = np.unique(b)
     multi = law != "wong" and sizes.size >= 2
+    if reece_only and not multi:
+        raise ValueError(
+            f"{' and '.join(reece_only)} give Reece's k'_c, k'_phi, which need two or more "
+            f"plate sizes; the data have one (b = {sizes[0]:g} m)"
+        )
     n_params = 3 if multi else 2
     if m <= n_params:
         raise ValueError(
             f"fit_plate_sinkage({law!r}) fits {n_params} parameters and needs more than "
             f"{n_params} points; got {m}"
         )
-    pscale = float(np.sqrt(np.mean(p**2)))
+    pscale = rms(p)
     if not pscale > 0:
         raise ValueError("pressure must not be all zero")
 

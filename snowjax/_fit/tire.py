@@ -23,8 +23,17 @@ from .._tire.tire import (
     longitudinal_friction,
     longitudinal_stiffness,
 )
-from .core import Estimate, FitResult, Solution, Transform, estimate, fit_result, least_squares
-from .data import read_package_csv, same_length, vector
+from .core import (
+    Estimate,
+    FitResult,
+    Solution,
+    Transform,
+    check_max_steps,
+    estimate,
+    fit_result,
+    least_squares,
+)
+from .data import read_package_csv, rms, same_length, vector
 
 __all__ = ["fit_tire_coefficients", "thesis_tire_table"]
 
@@ -292,14 +301,19 @@ def fit_tire_coefficients(
 
     **Arguments:** `load_kN` [kN] (> 0); `cs`, `ca` [kN/rad] (> 0); `mux`, `muy` [-];
     `e1` [-] in (0, 0.5); any of the five quantities may be `None` to skip its fit.
-    Every array has the length of `load_kN` and is finite.  `max_steps`:
-    Levenberg–Marquardt step limit.
+    Every array has the length of `load_kN` and is finite (and well below 1e154 in
+    magnitude: larger values overflow the fit's float64 arithmetic).  `max_steps`:
+    Levenberg–Marquardt step limit (an integer >= 1).
+
+    **Raises:** `ValueError` for data out of these ranges, too few loads for a load
+    function, or a fit that ends without a finite SSE.
 
     **Returns:** a `FitResult`; `residuals` are model − data in the data's units, stacked
     in the order C_s, C_α, μ_x, μ_y, E1 (present ones); standard errors and warnings
     (|correlation| > 0.95, standard error > |value|, a coefficient at its bound, no
     degrees of freedom) are per load function, each with its own s² = SSE / (m − p).
     """
+    max_steps = check_max_steps(max_steps)
     given = {"cs": cs, "ca": ca, "mux": mux, "muy": muy, "e1": e1}
     f, blocks, data = _tire_data(load_kN, given)
     keys = tuple(b[0] for b in blocks)
@@ -308,7 +322,7 @@ def fit_tire_coefficients(
     e1_start = sum(sizes[:-1]) if keys[-1] == "e1" else None
     args_data = dict(data)
     for k in keys:
-        args_data[k + "_scale"] = np.asarray(np.sqrt(np.mean(data[k] ** 2)))
+        args_data[k + "_scale"] = np.asarray(rms(data[k]))
     residual = _TireResidual(keys=keys, sizes=sizes)
     sol, transform, active = _solve_with_bounds(residual, f, args_data, theta0, e1_start, max_steps)
 

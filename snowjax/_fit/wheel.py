@@ -34,8 +34,16 @@ from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
-from .core import FitResult, Transform, estimate, fit_result, least_squares
-from .data import same_length, vector
+from .core import (
+    FitResult,
+    NonFiniteModelError,
+    Transform,
+    check_max_steps,
+    estimate,
+    fit_result,
+    least_squares,
+)
+from .data import rms, same_length, vector
 
 __all__ = [
     "fit_wheel",
@@ -129,7 +137,7 @@ class _WheelResidual(eqx.Module):
 
     def __call__(self, u, args):
         wheel, snow, distribution, load, slip, data, scale, transform = args
-        values = _finite_cotangent(transform(u))
+        values = transform(u)
         new = {"terrain": {}, "distribution": {}}
         for i, (owner, path) in enumerate(self.targets):
             new[owner][path] = values[i]
@@ -148,29 +156,6 @@ class _WheelResidual(eqx.Module):
         )
         pred = jnp.stack([getattr(st, q) for q in self.quantities])
         return _masked_residual(pred, data, scale, st.status).reshape(-1), (pred, st.status)
-
-
-@jax.custom_vjp
-def _finite_cotangent(x):
-    """Identity whose backward pass replaces non-finite cotangents by 0.
-
-    A derivative the model cannot provide (e.g. w.r.t. z_w once z_w exceeds the wheel
-    diameter, where `solve_wheel`'s base angle arccos(1 − 2 z_w/D) is clipped) then
-    shows up as a zero Jacobian column — "not identifiable" in the diagnostics — instead
-    of a NaN that would stop the Levenberg–Marquardt linear solves.
-    """
-    return x
-
-
-def _finite_cotangent_fwd(x):
-    return x, None
-
-
-def _finite_cotangent_bwd(_, ct):
-    return (jnp.where(jnp.isfinite(ct), ct, 0.0),)
-
-
-_finite_cotangent.defvjp(_finite_cotangent_fwd, _finite_cotangent_bwd)
 
 
 def _masked_residual(pred, data, scale, status):
@@ -259,7 +244,7 @@ def _wheel_data(load, slip, measured, scale):
         )
     scales = []
     for q, y in zip(quantities, data):
-        s = np.asarray(scale.get(q, np.sqrt(np.mean(y**2))), dtype=float)
+        s = np.asarray(scale.get(q, rms(y)), dtype=float)
         if s.ndim > 1 or s.size not in (1, m):
             raise ValueError(f"scale[{q!r}] must be a scalar or have one value per data point")
         if not (np.isfinite(s).all() and (s > 0).all()):
@@ -329,6 +314,50 @@ def _check_solvable(wheel, snow, distribution, ld, sl, shear) -> None:
 def _rebuild(obj, values: dict[str, float], dtype):
     """`obj` with its leaves set to `values` (JAX arrays of `dtype`)."""
     return _with_leaves(obj, {p: jnp.asarray(v, dtype) for p, v in values.items()})
+
+
+def _status_summary(status: np.ndarray) -> str:
+    """'12 ENTRY_ANGLE_LIMIT, 3 CONVERGED': the count of each status, most frequent first."""
+    codes, counts = np.unique(np.asarray(status).astype(int), return_counts=True)
+    order = np.argsort(-counts, kind="stable")
+    return ", ".join(f"{counts[k]} {Status(int(codes[k])).name}" for k in order)
+
+
+@eqx.filter_jit
+def _evaluate(residual, u, args):
+    """`residual(u, args)`, compiled once per residual configuration and shapes."""
+    return residual(u, args)
+
+
+def _start_diagnosis(residual, u0, args, start, targets, m) -> str:
+    """'; at the start values (...) k of m data points have no equilibrium (...)', or ''.
+
+    Lists the fitted and the held parameters; evaluated only after a failed fit (one more
+    compilation of the forward model).
+    """
+    try:
+        _, (_, status) = _evaluate(residual, jnp.asarray(u0), args)
+    except Exception:  # the diagnosis is a courtesy: never hide the original error
+        return ""
+    status = np.asarray(status).astype(int)
+    failed = int(np.sum((status != Status.CONVERGED) & (status != Status.BOTTOMED_OUT)))
+
+    def listed(fitted: bool) -> str:
+        return ", ".join(
+            f"{path} = {v:.6g} {_PARAMETER_UNITS.get(_field(path), '-')}".removesuffix(" -")
+            for owner, leaves in start.items()
+            for path, v in leaves.items()
+            if ((owner, path) in targets) == fitted
+        )
+
+    held = listed(False)
+    values = f"fitted: {listed(True)}" + (f"; held: {held}" if held else "")
+    if not failed:
+        return f"; at the start values ({values}) every data point has an equilibrium"
+    return (
+        f"; at the start values ({values}) {failed} of {m} data points have no "
+        f"equilibrium ({_status_summary(status)})"
+    )
 
 
 def _status_warnings(status: np.ndarray, m: int) -> list[str]:
@@ -425,7 +454,11 @@ def fit_wheel(
     being poisoned by NaN.  If points still fail at the optimum they are left out of the
     standard errors and named in `warnings`; bottomed-out points (`BOTTOMED_OUT`, the
     wheel on the base: sinkage = z_w) are valid model values but carry no information
-    on p_w, and are reported too.  `info["status"]` holds every point's status.
+    on p_w, and are reported too.  `info["status"]` holds every point's status.  A fit
+    that ends with fewer valid values (valid points × measured quantities) than fitted
+    parameters raises a `ValueError` that counts the statuses, as does one whose model
+    gave non-finite values to its own linear solves (the message then counts the
+    statuses at the start values).
 
     **Arguments:**
 
@@ -444,8 +477,9 @@ def fit_wheel(
       `"simplified"` only for `WongSnow` without a distribution).
     - `scale`: optional residual scale per quantity [m or N] (scalar or per point), see
       above.
-    - `max_steps`: Levenberg–Marquardt step limit; `nodes_per_panel`, `solve_max_steps`:
-      passed to `solve_wheel` (its quadrature nodes and Newton iteration limit).
+    - `max_steps`: Levenberg–Marquardt step limit (an integer >= 1); `nodes_per_panel`,
+      `solve_max_steps`: passed to `solve_wheel` (its quadrature nodes and Newton
+      iteration limit).
     - `distribution`: `None` (the thesis's front-region stresses) or a
       `snowjax.WongReece` (c1, c2, c3 [-], scalar leaves) whose leaves can be fitted too.
 
@@ -453,6 +487,10 @@ def fit_wheel(
     the type of `snow`), `distribution` (the fitted distribution or `None`),
     `transforms` (name -> `"log"` / `"linear"`), `predictions` (dict of model values at
     the optimum), `status`, `scale`.
+
+    **Raises:** `ValueError` for bad data or start values (naming the argument and the
+    value), and for a fit that fails (see "Failed equilibria"); `TypeError` for a wheel,
+    terrain or distribution of the wrong type.
 
     Use float64 (`jax.config.update("jax_enable_x64", True)`): the standard errors need
     derivatives accurate well beyond float32.  Each new combination of data length,
@@ -472,6 +510,7 @@ def fit_wheel(
             f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
         )
     names, targets = _resolve_fit_names(fit, snow, distribution)
+    max_steps = check_max_steps(max_steps)
     if shear not in ("classic", "simplified", "none"):
         raise ValueError(f"shear must be 'classic', 'simplified' or 'none', got {shear!r}")
     shear_model = cast(ShearModel, shear)  # one of the three, checked above
@@ -521,7 +560,11 @@ def fit_wheel(
         jnp.asarray(scales, dtype),
         transform.cast(dtype),
     )
-    sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
+    try:
+        sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
+    except NonFiniteModelError as err:
+        at_start = _start_diagnosis(residual, u0, args, start, targets, m)
+        raise NonFiniteModelError(f"fit_wheel: {err}{at_start}") from None
     pred, status = sol.aux
 
     warnings: list[str] = []
@@ -533,6 +576,14 @@ def fit_wheel(
     status = np.asarray(status).astype(int)
     warnings += _status_warnings(status, m)
     good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
+    n_valid = int(good.sum()) * len(quantities)
+    if n_valid < len(names):
+        raise ValueError(
+            f"fit_wheel: the fit failed: {m - int(good.sum())} of {m} data points have no "
+            f"equilibrium at the end of the fit ({_status_summary(status)}), which leaves "
+            f"{n_valid} valid value(s) for {len(names)} fitted parameter(s); check the start "
+            "values and the data"
+        )
     rows = np.tile(good, len(quantities))
     r_used = np.where(rows, sol.residual, 0.0)
     theta = transform.values(sol.u)

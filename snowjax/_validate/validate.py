@@ -55,7 +55,7 @@ def _read_csv(name: str) -> dict[str, np.ndarray]:
     path = importlib.resources.files("snowjax") / "data" / name
     lines = [
         ln.strip()
-        for ln in path.read_text(encoding="utf-8").splitlines()
+        for ln in path.read_text(encoding="utf-8-sig").splitlines()
         if ln.strip() and not ln.lstrip().startswith("#")
     ]
     header = [h.strip() for h in lines[0].split(",")]
