@@ -268,6 +268,16 @@ def test_torque_below_the_self_propelled_torque_only_creeps(steady):
     assert 0 < float(traj.speed[-1]) < EPS
 
 
+def test_a_step_not_solved_even_when_retried_stops_the_integration():
+    """With one iteration allowed, the steps from rest are not solved even at the step-size
+    controller's smallest step: the root finder's failure is the result, and the rows
+    after it hold inf states with `Status.INVALID_INPUT`."""
+    traj = sj.simulate_longitudinal(VEHICLE, SNOW, 545.0, 0.5, DT, newton_steps=1)
+    assert traj.result == diffrax.RESULTS.nonlinear_max_steps_reached
+    assert float(traj.speed[0]) == 0.0 and np.all(np.isinf(np.asarray(traj.speed[1:])))
+    assert np.all(np.asarray(traj.status[1:]) == Status.INVALID_INPUT)
+
+
 # ----------------------------------------------------------------------------------------
 # Bad input, notebook
 # ----------------------------------------------------------------------------------------

@@ -295,18 +295,23 @@ def _braking_split(theta0, slip, diameter, snow, shear, z0_rel, a):
     if shear == "classic":
         # j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta), k = 1 - i.
         k = 1 - slip
-        f = lambda th: (theta0 - th) - k * (jnp.sin(theta0) - jnp.sin(th))  # noqa: E731
+        sin_theta0 = jnp.sin(theta0)
         theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
-        has_root = (slip < 0) & (f(0.0) < 0) & (theta_star < theta0)
+        has_root = (slip < 0) & (theta0 - k * sin_theta0 < 0) & (theta_star < theta0)
+
+        def f_and_slope(th):  # 0 <= th <= theta0 < pi / 2: the Taylor sine and cosine
+            half_sin, half_cos = _sincos_half(th)
+            sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+            return (theta0 - th) - k * (sin_theta0 - sin), -1 + k * cos
+
         # f is concave and increasing on [0, theta_star]: Newton from 0 converges
         # monotonically from the left.
-
         def newton(_, th):
-            slope = jnp.maximum(-1 + k * jnp.cos(th), 1e-12)
-            return jnp.minimum(th - f(th) / slope, theta_star)
+            f, slope = f_and_slope(th)
+            return jnp.minimum(th - f / jnp.maximum(slope, 1e-12), theta_star)
 
         th = jax.lax.fori_loop(0, 8, newton, jnp.zeros_like(theta0))
-        slope = jnp.abs(-1 + k * jnp.cos(th))
+        slope = jnp.abs(f_and_slope(th)[1])
         scale = snow.shear_modulus / (r * jnp.maximum(slope, 1e-12))
     else:
         # U0 = tau1 s [(i + tau2) + (2i - i^2) s^2 / 6] changes sign at
@@ -322,6 +327,11 @@ def _braking_split(theta0, slip, diameter, snow, shear, z0_rel, a):
         du_ds = tau1 * ((slip + tau2) + (2 * slip - slip**2) * s_root**2 / 2)
         ds_dth = snow.p_w / snow.cohesion * a * jnp.sin(th) / jnp.maximum(z_root, 1e-300)
         scale = 1 / jnp.maximum(jnp.abs(du_ds * ds_dth), 1e-12)
+    # A sign change within 1e-3 theta0 of the axle is left to the first panel, whose
+    # quadratic map already clusters nodes there: splitting at it would put nodes so close
+    # to theta = 0 that sin^2(theta / 2) underflows in float32 (infinite pressure on a
+    # bottomed-out wheel).
+    has_root = has_root & (th > 1e-3 * theta0)
     split = jnp.where(has_root, th, no_split[0])
     scale = jnp.where(has_root, scale, jnp.inf)
     return split, scale

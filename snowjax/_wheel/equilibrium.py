@@ -1,7 +1,8 @@
 """The sinkage-versus-slip equilibrium of a rigid wheel on shallow snow (eq. 4.14).
 
 `solve_wheel` finds the entry angle theta0 at which the vertical resultant of the rim
-stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton).
+stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton
+kept inside a bracket, `BracketedNewton`).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
@@ -24,13 +25,12 @@ from typing import cast
 import equinox as eqx
 import jax
 import jax.numpy as jnp
-import lineax as lx
 import numpy as np
-import optimistix as optx
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._terrain.base import Terrain
 from .._terrain.layered import LayeredSnow
+from .bracketed import solve_elementwise
 from .contact import (
     ShearModel,
     _broadcast_leaves,
@@ -117,7 +117,19 @@ def _tolerance(dtype) -> float:
 
 
 S_MIN = 1e-6  # lower bound of the solver variable s (theta0 = theta_cap exp(-s^2))
+
+
+def _s_min(dtype) -> float:
+    """S_MIN in float64; 1e-3 in float32, where theta_cap exp(-1e-12) rounds to theta_cap
+    (the base itself, where Wong's pressure is infinite); 1e-3 keeps theta0 <= (1 - 1e-6)
+    theta_cap."""
+    return S_MIN if jnp.dtype(dtype) == jnp.float64 else 1e-3
 S_MAX = 4.0  # theta0 = 1.1e-7 theta_cap: a contact that carries next to nothing
+
+
+def _balance_residual(w, target):
+    """ln(W / target), floored at ln(1e-30) where W <= 0 (a braked wheel's W can be)."""
+    return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
 
 
 def _theta_from_s(s, theta_cap):
@@ -132,7 +144,7 @@ def _newton_s(residual, s, steps):
         delta = jnp.where(df < 0, f / jnp.where(df < 0, df, -1.0), 0.0)
         # Damped: at s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a
         # full step can overshoot to where W underflows (float32).
-        return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), S_MIN, S_MAX)
+        return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
 
     return jax.lax.fori_loop(0, steps, step, s)
 
@@ -147,7 +159,8 @@ def _initial_guess(theta_cap, load, diameter, width, snow):
     a = diameter / (2 * snow.z_w)
     rb = diameter / 2 * width
     theta = jnp.cbrt(3 * load / (rb * snow.p_w * a))
-    s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), S_MIN**2))
+    s_min = _s_min(theta.dtype)
+    s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
 
     def residual(s):
         th = _theta_from_s(s, theta_cap)
@@ -155,7 +168,7 @@ def _initial_guess(theta_cap, load, diameter, width, snow):
         w = rb * _sigma_cos_integral(th, z0_rel, a, snow.p_w)
         return jnp.log(jnp.maximum(w, 1e-30 * load) / load)
 
-    return jax.lax.stop_gradient(_newton_s(residual, jnp.maximum(s, S_MIN), 3))
+    return jax.lax.stop_gradient(_newton_s(residual, jnp.maximum(s, s_min), 3))
 
 
 def _warm_start(guess, theta_cap):
@@ -165,17 +178,17 @@ def _warm_start(guess, theta_cap):
     """
     ok = jnp.isfinite(guess) & (guess > 0)
     ratio = jnp.clip(jnp.where(ok, guess, 0.5 * theta_cap) / theta_cap, jnp.exp(-(S_MAX**2)), 1.0)
-    s = jnp.sqrt(jnp.maximum(-jnp.log(ratio), S_MIN**2))
-    return jax.lax.stop_gradient(jnp.clip(s, S_MIN, S_MAX))
+    s_min = _s_min(ratio.dtype)
+    s = jnp.sqrt(jnp.maximum(-jnp.log(ratio), s_min**2))
+    return jax.lax.stop_gradient(jnp.clip(s, s_min, S_MAX))
 
 
 def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     """Solve a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
-    The batch is one `optx.root_find` with a diagonal Jacobian (the elements are
-    independent), so Newton's linear solve is one tangent evaluation and batch-wide
-    decisions (is a capacity check or the bisection fallback needed at all?) are
-    `lax.cond`s that cost nothing when not taken.
+    The batch is one `optx.root_find` (`BracketedNewton`) with a diagonal Jacobian (the
+    elements are independent), so a Newton step is one tangent evaluation, and the
+    batch-wide capacity check is a `lax.cond` that costs nothing when not needed.
     """
     dtype = load.dtype
     tol = _tolerance(dtype)
@@ -204,7 +217,7 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     # Capacity of the layer, W at s_min.  For slip >= 0 the shear stress only adds to W,
     # so loads below the closed-form no-shear capacity are known to be carried and the
     # quadrature is only needed if some element brakes or is heavier than that.
-    s_min = jnp.full_like(load, S_MIN)
+    s_min = jnp.full_like(load, _s_min(load.dtype))
     theta_top = _theta_from_s(s_min, theta_cap)
     a = diameter / (2 * snow.z_w)
     z0_top = jnp.maximum(1 - max_sinkage(theta_top, diameter) / snow.z_w, 0.0)
@@ -220,9 +233,13 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     # target would do) so that the batch's Newton iteration terminates quickly.
     target = jnp.where(over, 0.5 * capacity, load)
 
-    def residual(s, args):
-        w = vertical_load(_theta_from_s(s, theta_cap))
-        return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
+    def residual(s, params):
+        th_cap, tgt, i, d, b, sn = params
+        fn = lambda th, i, d, b, sn: _contact_scalar(  # noqa: E731
+            th, i, d, b, sn, shear, n_nodes, None, braking, vertical_only=True
+        )
+        w = jax.vmap(fn)(_theta_from_s(s, th_cap), i, d, b, sn)
+        return _balance_residual(w, tgt)
 
     if guess is None:
         s0 = _initial_guess(theta_cap, target, diameter, width, snow)
@@ -238,33 +255,19 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
             s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow)
     else:
         s0 = _warm_start(guess, theta_cap)
-    newton = optx.root_find(
+    # Every element's root lies in [s_min, S_MAX]: W = capacity > target at s_min and
+    # W ~ 0 < target at S_MAX.  W need not be monotone in between (a braked wheel's
+    # backward shear stress pulls it down: cohesion >> p_w, light load), hence the
+    # bracketed Newton.
+    s = solve_elementwise(
         residual,
-        optx.Newton(rtol=tol, atol=tol),
         s0,
-        options=dict(lower=s_min),
-        max_steps=max_steps,
-        throw=False,
-        tags=frozenset({lx.diagonal_tag}),
+        s_min,
+        jnp.full_like(load, S_MAX),
+        (theta_cap, target, slip, diameter, width, snow),
+        tol,
+        max_steps,
     )
-    # Per element: Newton's last residual (at the iterate before its final step) met
-    # the tolerance, so the returned iterate is a root to well within it.
-    ok = (jnp.abs(newton.state.f) <= tol) | over
-    s = newton.value
-    if braking:
-        # For the rare elements Newton leaves unbalanced W(theta0) is not monotone: a
-        # braked wheel's backward shear stress pulls it down (cohesion >> p_w, light
-        # load).  (Without braking dW/dtheta0 > 0.)  The bracket [s_min, S_MAX] always
-        # contains a root (W = capacity > load at s_min, W ~ 0 < load at S_MAX).
-        s = jax.lax.cond(
-            jnp.all(ok),
-            lambda: s,
-            lambda: jnp.where(
-                ok,
-                s,
-                _bisection(ok, s, s_min, theta_cap, target, slip, wheel, snow, shear, n_nodes),
-            ),
-        )
     theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
     w, r, t, m = all_forces(theta0, over & reaches_base)
     balanced = jnp.abs(w / target - 1) <= 10 * tol  # 1e-8 in float64
@@ -274,36 +277,6 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
         jnp.where(balanced, Status.CONVERGED, Status.NOT_CONVERGED),
     )
     return theta0, r, t, m, status.astype(jnp.int32)
-
-
-def _bisection(ok, s, s_min, theta_cap, target, slip, wheel, snow, shear, n_nodes):
-    """Bisection on [s_min, S_MAX] for the elements not `ok` (degenerate [s, s] for the rest).
-
-    Under vmap the bisection loop only iterates while some element needs it.
-    """
-    dtype = s.dtype
-    tol = _tolerance(dtype)
-    s_fixed = jax.lax.stop_gradient(s)
-    lo = jnp.where(ok, s_fixed, s_min)
-    hi = jnp.where(ok, s_fixed, jnp.asarray(S_MAX, dtype))
-
-    def one(lo_k, hi_k, theta_cap_k, target_k, i_k, d_k, b_k, sn_k):
-        def f(s, args):
-            th = _theta_from_s(s, theta_cap_k)
-            w = _contact_scalar(th, i_k, d_k, b_k, sn_k, shear, n_nodes, None, True, True)
-            return w / target_k - 1
-
-        sol = optx.root_find(
-            f,
-            optx.Bisection(rtol=tol, atol=tol, flip=True),  # W decreases with s
-            0.5 * (lo_k + hi_k),
-            options=dict(lower=lo_k, upper=hi_k),
-            max_steps=256,
-            throw=False,
-        )
-        return sol.value
-
-    return jax.vmap(one)(lo, hi, theta_cap, target, slip, wheel.diameter, wheel.width, snow)
 
 
 def _solve_batch(wheel, snow, load, slip, guess, shear, n, max_steps, layout):
@@ -391,7 +364,7 @@ def _scan_grid(terrain, dtype):
     theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
     peak; a peak narrower than that can be missed (then a deeper root is returned).
     """
-    s2 = np.linspace(S_MIN**2, S_MAX**2, 9)
+    s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
     if isinstance(terrain, LayeredSnow):
         s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
     return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
@@ -406,8 +379,8 @@ def _solve_general_layout(
     shallowest grid interval where W crosses the load brackets the root (for a layered
     snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
     and interpolating ln W linearly in s^2 inside it (exact for a power law) starts
-    Newton, which is kept inside the bracket.  Elements Newton leaves unbalanced are
-    finished by bisection in the bracket (`lax.cond`: free when none needs it).
+    Newton, which is kept inside the bracket and bisects where a Newton step would leave
+    it (`BracketedNewton`).
     """
     dtype = load.dtype
     tol = _tolerance(dtype)
@@ -428,7 +401,7 @@ def _solve_general_layout(
     def vertical(theta0) -> Array:  # W alone
         return cast(Array, contact(theta0, True))
 
-    s_min = jnp.full_like(load, S_MIN)
+    s_min = jnp.full_like(load, _s_min(load.dtype))
     s_max = jnp.full_like(load, S_MAX)
     if guess is None:
         s_grid = _scan_grid(terrain, dtype)
@@ -458,45 +431,22 @@ def _solve_general_layout(
         lower, upper = s_min, s_max
         s0 = _warm_start(guess, theta_cap)
 
-    def residual(s, args):
-        w = vertical(_theta_from_s(s, theta_cap))
-        return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
+    def residual(s, params):
+        th_cap, tgt, i, d, b, tr, fr = params
+        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
+            th, i, d, b, tr, fr, shear, n, braking, True
+        )
+        return _balance_residual(jax.vmap(fn)(_theta_from_s(s, th_cap), i, d, b, tr, fr), tgt)
 
-    newton = optx.root_find(
+    s = solve_elementwise(
         residual,
-        optx.Newton(rtol=tol, atol=tol),
         jnp.clip(s0, lower, upper),
-        options=dict(lower=lower, upper=upper),
-        max_steps=max_steps,
-        throw=False,
-        tags=frozenset({lx.diagonal_tag}),
+        lower,
+        upper,
+        (theta_cap, target, slip, diameter, width, terrain, fractions),
+        tol,
+        max_steps,
     )
-    ok = (jnp.abs(newton.state.f) <= tol) | over
-    s = newton.value
-
-    def bisect():
-        def one(lo_k, hi_k, th_cap_k, target_k, i_k, d_k, b_k, terrain_k, fr_k):
-            def f(s, args):
-                th = _theta_from_s(s, th_cap_k)
-                w = general_contact(th, i_k, d_k, b_k, terrain_k, fr_k, shear, n, braking, True)
-                return w / target_k - 1
-
-            return optx.root_find(
-                f,
-                optx.Bisection(rtol=tol, atol=tol, flip=True),  # W decreases with s
-                0.5 * (lo_k + hi_k),
-                options=dict(lower=lo_k, upper=hi_k),
-                max_steps=256,
-                throw=False,
-            ).value
-
-        s_fixed = jax.lax.stop_gradient(s)
-        lo = jnp.where(ok, s_fixed, lower)
-        hi = jnp.where(ok, s_fixed, upper)
-        s_b = jax.vmap(one)(lo, hi, theta_cap, target, slip, diameter, width, terrain, fractions)
-        return jnp.where(ok, s, s_b)
-
-    s = jax.lax.cond(jnp.all(ok), lambda: s, bisect)
     theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
     w, r, t, m = contact(theta0, False)
     balanced = jnp.abs(w / target - 1) <= 10 * tol

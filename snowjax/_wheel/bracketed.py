@@ -1,0 +1,158 @@
+"""Newton's method inside a per-element bracket: the batched load-balance root finder.
+
+`solve_wheel` solves one scalar equation per batch element (elements are independent,
+the Jacobian is diagonal).  `optx.Newton` alone does not do this job: its convergence
+test is batch-wide, and it has no bracket, so a single element whose W(theta0) is not
+monotone (a braked wheel, whose backward shear stress pulls it down; a layered snow)
+keeps the whole batch iterating to `max_steps`, after which a vmapped `optx.Bisection`
+costs about 35 more evaluations of the batch.  That made braking batches ~30x slower
+than driving ones.  This solver is the classic safeguarded Newton ("rtsafe", Press et
+al., Numerical Recipes, 3rd ed., section 9.4) written as an optimistix root finder, so
+`optx.root_find` and its implicit-function-theorem gradients are unchanged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, ClassVar
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import lineax as lx
+import optimistix as optx
+from jaxtyping import Array, Bool, Float
+
+
+class _BracketState(eqx.Module):
+    lower: Float[Array, " n"]
+    upper: Float[Array, " n"]
+    f: Float[Array, " n"]
+    diff: Float[Array, " n"]
+
+
+class BracketedNewton(optx.AbstractRootFinder):
+    """Elementwise Newton on independent scalar equations f_k(y_k) = 0, kept in a bracket.
+
+    `options=dict(lower=..., upper=...)` (arrays shaped like y) must bracket a sign
+    change of every element with `f(lower) > 0 > f(upper)`; f need not be monotone in
+    between.  Each step evaluates f and its diagonal derivative (one forward-mode
+    tangent), shrinks each bracket to the side that keeps the sign change, and takes the
+    Newton step where it has the right slope and stays strictly inside the bracket, else
+    bisects.  An element whose |f| is already within `atol` only takes a Newton step
+    that stays in the bracket (it never bisects away from a root).  The solve stops when
+    every element has |f| <= atol and its last step was below `atol + rtol |y|`, or its
+    bracket is narrower than that.
+    """
+
+    rtol: float
+    atol: float
+    norm: ClassVar[Callable] = optx.max_norm
+
+    def init(self, fn, y, args, options, f_struct, aux_struct, tags) -> _BracketState:
+        del fn, args, aux_struct, tags
+        lower = jnp.broadcast_to(jnp.asarray(options["lower"], f_struct.dtype), y.shape)
+        upper = jnp.broadcast_to(jnp.asarray(options["upper"], f_struct.dtype), y.shape)
+        inf = jnp.full(y.shape, jnp.inf, f_struct.dtype)
+        return _BracketState(lower, upper, inf, inf)
+
+    def step(self, fn, y, args, options, state: _BracketState, tags):
+        del options, tags
+        f, lin, aux = jax.linearize(lambda z: fn(z, args), y, has_aux=True)
+        df = lin(jnp.ones_like(y))
+        positive = f > 0  # the sign change lies above y
+        lower = jnp.where(positive, y, state.lower)
+        upper = jnp.where(positive, state.upper, y)
+        newton = y - f / jnp.where(df < 0, df, -1.0)
+        inside = (df < 0) & (newton > lower) & (newton < upper)
+        done = jnp.abs(f) <= self.atol
+        bisect = jnp.where(done, y, lower + 0.5 * (upper - lower))
+        new_y = jnp.where(inside, newton, bisect)
+        return new_y, _BracketState(lower, upper, f, y - new_y), aux
+
+    def terminate(self, fn, y, args, options, state: _BracketState, tags):
+        del fn, args, options, tags
+        scale = self.atol + self.rtol * jnp.abs(y)
+        converged = (jnp.abs(state.f) <= self.atol) & (jnp.abs(state.diff) <= scale)
+        collapsed = state.upper - state.lower <= scale
+        finished: Bool[Array, ""] = jnp.all(converged | collapsed)
+        return finished, optx.RESULTS.successful
+
+    def postprocess(self, fn, y, aux, args, options, state, tags, result):
+        del fn, args, options, state, tags, result
+        stats: dict[str, Any] = {}
+        return y, aux, stats
+
+
+# Newton steps every element of a batch takes together; elements still unconverged then
+# (a braked wheel whose W(theta0) is not monotone, a poor initial guess) continue alone.
+FIRST_PHASE_STEPS = 5
+# At most this many such stragglers are gathered into a small batch of their own; more
+# than that and the whole batch iterates on.
+STRAGGLERS = 64
+
+
+def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
+    """Roots of `residual(y, params)` (elementwise over 1-D y) by `BracketedNewton`.
+
+    A batched iteration runs until its slowest element converges, so one straggler
+    would make every element of the batch pay for its extra Newton steps.  All elements
+    take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered,
+    solved on their own from where they stopped, and scattered back.  Gradients come
+    from each `optx.root_find`'s implicit adjoint, as for a single solve.
+
+    **Arguments:** `residual(y, params) -> f` elementwise, `y0`, `lower`, `upper` (1-D,
+    bracketing a sign change, `f(lower) > 0 > f(upper)`), `params` (a pytree of arrays with
+    the batch on axis 0), `tol` (absolute, on f and on the step), `max_steps` (total).
+    **Returns:** y, shape of y0.
+    """
+    solver = BracketedNewton(rtol=tol, atol=tol)
+    tags = frozenset({lx.diagonal_tag})
+
+    def solve(y_start, lo, hi, p, steps):
+        lo, hi = jax.lax.stop_gradient((lo, hi))
+        return optx.root_find(
+            residual,
+            solver,
+            y_start,
+            args=p,
+            options=dict(lower=lo, upper=hi),
+            max_steps=steps,
+            throw=False,
+            tags=tags,
+        )
+
+    first = solve(y0, lower, upper, params, min(FIRST_PHASE_STEPS, max_steps))
+    rest = max_steps - FIRST_PHASE_STEPS
+    if rest <= 0:
+        return first.value
+    y, state = first.value, first.state
+    scale = tol + tol * jnp.abs(y)
+    converged = (jnp.abs(state.f) <= tol) & (jnp.abs(state.diff) <= scale)
+    left = ~(converged | (state.upper - state.lower <= scale))
+    size = y.shape[0]
+    m = min(STRAGGLERS, size)
+
+    def stragglers():
+        # Slots beyond the stragglers hold index `size`: gathered as the last element
+        # (any valid input), dropped when scattering back.
+        idx = jnp.nonzero(left, size=m, fill_value=size)[0]
+        pick = lambda x: jnp.take(x, idx, axis=0, mode="clip")  # noqa: E731
+        sub = solve(
+            jax.lax.stop_gradient(pick(y)),
+            pick(state.lower),
+            pick(state.upper),
+            jax.tree_util.tree_map(pick, params),
+            rest,
+        )
+        return y.at[idx].set(sub.value, mode="drop")
+
+    def everyone():
+        return solve(jax.lax.stop_gradient(y), state.lower, state.upper, params, rest).value
+
+    n_left = jnp.sum(left)
+    return jax.lax.cond(
+        n_left == 0,
+        lambda: y,
+        lambda: jax.lax.cond(n_left <= m, stragglers, everyone),
+    )
