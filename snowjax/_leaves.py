@@ -26,7 +26,9 @@ def _as_float(x: Any) -> Any:
 
     Python ints become the default float type; existing floating arrays keep their dtype,
     so a float32 parameter set stays float32.  Non-numeric placeholders (None, sentinels
-    used by `jax.vmap` in_axes or `eqx.filter`) pass through unchanged.
+    used by `jax.vmap` in_axes or `eqx.filter`) pass through unchanged, and so do
+    booleans, complex numbers and strings, which `_check_real_leaves` then refuses by
+    name (a `p_w` of `True` is not 1 Pa).
     """
     if x is None or isinstance(x, jax.ShapeDtypeStruct):
         return x
@@ -34,9 +36,39 @@ def _as_float(x: Any) -> Any:
         arr = jnp.asarray(x)
     except TypeError:
         return x
-    if not jnp.issubdtype(arr.dtype, jnp.floating):
+    if arr.dtype.kind in "iu":
         arr = arr.astype(jnp.result_type(float))
     return arr
+
+
+_KINDS = {
+    "b": "a boolean",
+    "c": "a complex number",
+    "U": "a string",
+    "S": "bytes",
+    "O": "an object",
+}
+
+
+def _check_real_leaves(module) -> None:
+    """`__check_init__` of parameter sets: TypeError naming a leaf that is not real-valued.
+
+    Leaves that are not arrays (vmap / filter sentinels, None) are left alone.
+    """
+    for path, leaf in _module_leaves(module).items():
+        if isinstance(leaf, (str, bytes)):
+            what = "a string"
+        elif hasattr(leaf, "dtype") and not isinstance(leaf, jax.ShapeDtypeStruct):
+            kind = leaf.dtype.kind
+            if kind == "f":
+                continue
+            what = _KINDS.get(kind, f"dtype {leaf.dtype}")
+        else:
+            continue
+        raise TypeError(
+            f"{type(module).__name__}.{path} must be a real number or array of real numbers"
+            f" (SI units), got {what}"
+        )
 
 
 def _module_leaves(obj, prefix: str = "") -> dict[str, Any]:

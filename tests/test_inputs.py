@@ -66,3 +66,33 @@ def test_traced_inputs_still_work():
     np.testing.assert_allclose(
         f(np.array([4e3, 5e3])), sj.solve_wheel(WHEEL, SNOW, [4e3, 5e3], 0.3).sinkage, rtol=1e-12
     )
+
+
+@pytest.mark.parametrize(
+    ("make", "message"),
+    [
+        (lambda: sj.WongSnow(True, 0.2, 18e3, 0.08, 0.01), "WongSnow.p_w must be a real number"),
+        (lambda: sj.RigidWheel(0.7, "0.2"), "RigidWheel.width must be a real number"),
+        (lambda: sj.BekkerSoil(1.0, 1 + 2j, 1e5, 1e3, 0.3), "BekkerSoil.k_c must be a real"),
+        (lambda: sj.WongReece(np.array([True]), 0.3), "WongReece.c1 must be a real number"),
+    ],
+)
+def test_parameter_leaves_must_be_real(make, message):
+    with pytest.raises(TypeError, match=re.escape(message)):
+        make()
+
+
+@pytest.mark.parametrize(
+    ("field", "value"),
+    [("p_w", 1e300), ("cohesion", 1e-300), ("z_w", 1e-300), ("shear_modulus", 1e90)],
+)
+def test_values_the_working_precision_cannot_carry_are_invalid(field, value):
+    params = dict(p_w=85e3, z_w=0.2, cohesion=18e3, tan_phi=0.08, shear_modulus=0.01)
+    snow = sj.WongSnow(**(params | {field: value}))
+    with pytest.raises(ValueError, match=re.escape(f"snow.{field} = {value!r} is outside")):
+        sj.solve_wheel(WHEEL, snow, 5000.0, 0.3)
+    # Traced: the element is INVALID_INPUT (NaN fields), its neighbour is solved.
+    batch = sj.WongSnow(**(params | {field: np.array([value, params[field]])}))
+    st = jax.jit(lambda s: sj.solve_wheel(WHEEL, s, 5000.0, 0.3))(batch)
+    assert list(np.asarray(st.status)) == [sj.Status.INVALID_INPUT, sj.Status.CONVERGED]
+    assert np.isnan(st.sinkage[0]) and np.isfinite(st.sinkage[1])

@@ -494,3 +494,52 @@ def test_float32_runs_without_nan():
     ok = (st.status == Status.CONVERGED) & (st64.status == Status.CONVERGED)
     assert ok.sum() > 100
     assert np.max(np.abs(st.sinkage[ok] / st64.sinkage[ok] - 1)) < 1e-3
+
+
+def test_float32_bottomed_out_braking_is_not_nan():
+    """Found by a 200,000-case float32 run: simplified shear, light braking, a load far
+    above the layer's capacity.  float64 says BOTTOMED_OUT; float32 used to return
+    NOT_CONVERGED with NaN forces (theta_cap exp(-1e-12) rounds to theta_cap in float32,
+    and a shear sign change 6e-19 rad from the axle put quadrature nodes where
+    sin^2(theta / 2) underflows)."""
+    args = dict(
+        wheel=(0.8661279135398763, 0.34086878939353893),
+        snow=(5328.866453240917, 0.2538495079008268, 19761.341545065072, 0.15277565521854541,
+              0.004666612719160291),
+        load=32739.45797363491,
+        slip=-0.008184149071585156,
+    )  # fmt: skip
+    states = {}
+    for dtype in (np.float32, np.float64):
+        c = lambda x: np.asarray(x, dtype)  # noqa: E731, B023
+        states[dtype] = sj.solve_wheel(
+            sj.RigidWheel(*map(c, args["wheel"])),
+            sj.WongSnow(*map(c, args["snow"])),
+            c(args["load"]),
+            c(args["slip"]),
+            shear="simplified",
+        )
+    for state in states.values():
+        assert int(state.status) == Status.BOTTOMED_OUT
+    for name in ("motion_resistance", "thrust", "drawbar_pull", "torque"):
+        np.testing.assert_allclose(
+            float(getattr(states[np.float32], name)),
+            float(getattr(states[np.float64], name)),
+            rtol=1e-5,
+        )
+
+
+def test_braking_reaches_the_balance_it_checks():
+    """A braking case that used to stop 1.03e-8 short of the 1e-8 balance check
+    (NOT_CONVERGED) although it has a root: sinkage 0.1844685477 m (SciPy brentq)."""
+    wheel = sj.RigidWheel(0.838689490756816, 0.4068918169535575)
+    snow = sj.WongSnow(
+        10519.555399329302, 0.33005179684938385, 12439.140744402226, 0.5283044212439982,
+        0.006093208889216619,
+    )  # fmt: skip
+    load, slip = 304.6172943313189, -0.5457944348831292
+    st = sj.solve_wheel(wheel, snow, load, slip)
+    assert int(st.status) == Status.CONVERGED
+    w = sj.contact_forces(wheel, snow, st.entry_angle, slip).vertical_load
+    assert abs(float(w) / load - 1) <= 1e-12
+    assert abs(float(st.sinkage) - 0.1844685477) <= 1e-10

@@ -56,7 +56,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._leaves import _as_float, _is_traced
+from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel, _check_shear
 from .._wheel.distribution import WongReece
@@ -292,6 +292,8 @@ class Vehicle(eqx.Module):
       the torque: a wheel with zero applied torque rolls freely.
     """
 
+    __check_init__ = _check_real_leaves
+
     mass: Float[Array, ""] = eqx.field(converter=_as_float)
     wheel_inertia: Float[Array, "..."] = eqx.field(converter=_as_float)
     wheel: RigidWheel
@@ -316,6 +318,8 @@ class TorqueProfile(eqx.Module):
     - `values`: torque at the knots [N m], shape (k,) (same for every wheel) or (k, n)
       (one column per wheel).
     """
+
+    __check_init__ = _check_real_leaves
 
     times: Float[Array, " k"] = eqx.field(converter=_as_float)
     values: Float[Array, "k ..."] = eqx.field(converter=_as_float)

@@ -12,6 +12,8 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
+from .._leaves import _check_real_leaves
+
 
 def _clip_negative(x) -> Array:
     """max(x, 0) with gradient 1 at x = 0 (jnp.maximum would split it 1/2 : 1/2)."""
@@ -41,6 +43,8 @@ class Terrain(eqx.Module):
     - `depth`: the depth of the hard base [m] (`inf` for an infinitely deep terrain), the
       largest sinkage the wheel can reach.
     """
+
+    __check_init__ = _check_real_leaves
 
     #: Prefix used in error messages ("snow.p_w must be ...").
     label: ClassVar[str] = "terrain"

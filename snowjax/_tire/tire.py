@@ -48,7 +48,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _as_float
+from .._leaves import _as_float, _check_real_leaves
 from .common import (
     _KN,
     _check,
@@ -128,6 +128,8 @@ class TireParameters(eqx.Module):
     - `mu_y`: lateral friction coefficient μ_y [-] (3.20).
     - `e1`: first-order contact pressure constant E1 [-] (3.10, 3.21); E2 = E1² + 1/12.
     """
+
+    __check_init__ = _check_real_leaves
 
     c_s: Float[Array, "..."] = eqx.field(converter=_as_float)
     c_alpha: Float[Array, "..."] = eqx.field(converter=_as_float)
@@ -303,6 +305,8 @@ class TireCoefficients(eqx.Module):
     snow; outside that range they are extrapolations (μ_x of (3.19) turns negative between
     16.7 and 46.8 kN).
     """
+
+    __check_init__ = _check_real_leaves
 
     A1: Float[Array, "..."] = eqx.field(converter=_as_float)
     A2: Float[Array, "..."] = eqx.field(converter=_as_float)

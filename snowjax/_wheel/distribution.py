@@ -12,7 +12,7 @@ from __future__ import annotations
 import equinox as eqx
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _as_float
+from .._leaves import _as_float, _check_real_leaves
 
 __all__ = ["WongReece"]
 
@@ -39,6 +39,8 @@ class WongReece(eqx.Module):
     **Valid range** (checked per element; invalid elements get `Status.INVALID_INPUT`,
     concrete inputs raise `ValueError`): `0 <= c1 + c2 i < 1` and `-1 < c3 <= c1 + c2 i`.
     """
+
+    __check_init__ = _check_real_leaves
 
     c1: Float[Array, "..."] = eqx.field(converter=_as_float)
     c2: Float[Array, "..."] = eqx.field(converter=_as_float)

@@ -6,7 +6,7 @@ import equinox as eqx
 from jaxtyping import Array, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
-from .._leaves import _as_float
+from .._leaves import _as_float, _check_real_leaves
 
 
 class RigidWheel(eqx.Module):
@@ -17,6 +17,8 @@ class RigidWheel(eqx.Module):
     - `diameter`: D [m].
     - `width`: b [m].
     """
+
+    __check_init__ = _check_real_leaves
 
     diameter: Float[Array, "..."] = eqx.field(converter=_as_float)
     width: Float[Array, "..."] = eqx.field(converter=_as_float)
