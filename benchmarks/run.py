@@ -25,6 +25,7 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # for tests/reference.py (the independent SciPy reference)
+sys.path.insert(0, str(ROOT / "benchmarks"))
 
 import jax  # noqa: E402
 
@@ -34,6 +35,7 @@ import numpy as np  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 from rich.table import Table  # noqa: E402
+from robustness import cost_ratio  # noqa: E402
 
 import snowjax as sj  # noqa: E402
 
@@ -215,6 +217,7 @@ def main(argv=None):
 
     steps = [
         "throughput",
+        "braking",
         "models",
         "terrains",
         "float32",
@@ -235,6 +238,19 @@ def main(argv=None):
             np.max(np.abs(np.asarray(balance) / inputs(sizes[-1])[0] - 1))
         )
         n_ref = 10_000 if args.quick else 100_000
+        # Braking against driving: random in-range cases (benchmarks/cases.py), slips in
+        # [-0.5, 0) against [0, 0.99), same parameter sets; the target is <= 2x.
+        for shear in ("classic", "simplified", "none"):
+            for n in (10_000, n_ref) if n_ref > 10_000 else (n_ref,):
+                ratio, times = cost_ratio(n, shear, repeats=2)
+                numbers[f"braking_ratio_{shear}_{n}"] = ratio
+                add(
+                    f"braking / driving time, {shear}, batch {n:,}",
+                    f"{ratio:.2f}x",
+                    f"random in-range cases: {times['braking'] * 1e3:.0f} ms vs"
+                    f" {times['driving'] * 1e3:.0f} ms",
+                )
+        progress.advance(task)
         for shear in ("simplified", "none"):
             rate, _, _ = throughput(n_ref, shear=shear, repeats=2)
             numbers[f"throughput_{shear}"] = rate

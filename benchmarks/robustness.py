@@ -1,0 +1,204 @@
+"""Reliability of `solve_wheel` over its documented range: statuses, NaN, balance, float32.
+
+    python benchmarks/robustness.py                 # 10^6 cases per shear model (~10 min)
+    python benchmarks/robustness.py --cases 100000  # quicker
+    python benchmarks/robustness.py --no-readme
+
+Random in-range cases (`benchmarks/cases.py`: WongSnow front region, slips -0.5 to 0.99,
+so about a third brake), every shear model, float64 and float32.  Per shear model and
+per family (driving: slip >= 0, braking: slip < 0) it reports the statuses, the number
+of NaN fields outside INVALID_INPUT, the load balance |W(theta0) / load - 1| at
+convergence (W re-evaluated by `contact_forces`), the float32-vs-float64 sinkage error
+quantiles over cases converged in both, the cost of a braking batch relative to a
+driving batch of the same size, non-finite gradients over converged cases, and an
+independent check of a few hundred cases against SciPy (quad + brentq).  Writes the
+table between `<!-- robustness:start -->` and `<!-- robustness:end -->` in README.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pathlib
+import sys
+import time
+
+ROOT = pathlib.Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))  # tests/reference.py: the independent SciPy reference
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+import jax  # noqa: E402
+
+jax.config.update("jax_enable_x64", True)
+import jax.numpy as jnp  # noqa: E402
+import numpy as np  # noqa: E402
+from cases import in_range  # noqa: E402
+from rich.console import Console  # noqa: E402
+from rich.progress import track  # noqa: E402
+
+import snowjax as sj  # noqa: E402
+from snowjax import Status  # noqa: E402
+
+SHEARS = ("classic", "simplified", "none")
+FIELDS = ("entry_angle", "sinkage", "motion_resistance", "thrust", "drawbar_pull", "torque")
+CHUNK = 100_000  # cases per solve_wheel call
+
+
+def solve_in_chunks(wheel, snow, load, slip, shear):
+    """solve_wheel on `CHUNK`-sized pieces (bounded memory); NumPy fields."""
+    n = load.shape[0]
+    parts = []
+    for k in range(0, n, CHUNK):
+        piece = slice(k, min(k + CHUNK, n))
+        take = lambda tree: jax.tree_util.tree_map(lambda x: x[piece], tree)  # noqa: E731,B023
+        st = sj.solve_wheel(take(wheel), take(snow), load[piece], slip[piece], shear=shear)
+        parts.append({f: np.asarray(getattr(st, f)) for f in (*FIELDS, "status")})
+    return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
+
+
+def balance(wheel, snow, load, slip, theta0, shear):
+    """|W(theta0) / load - 1| with W from contact_forces (NaN where theta0 is NaN)."""
+    out = np.empty_like(load, dtype=np.float64)
+    for k in range(0, load.shape[0], CHUNK):
+        piece = slice(k, min(k + CHUNK, load.shape[0]))
+        take = lambda tree: jax.tree_util.tree_map(lambda x: x[piece], tree)  # noqa: E731,B023
+        th = np.where(np.isfinite(theta0[piece]), theta0[piece], 0.1)
+        w = sj.contact_forces(take(wheel), take(snow), th, slip[piece], shear).vertical_load
+        out[piece] = np.abs(np.asarray(w) / load[piece] - 1)
+    return out
+
+
+def cost_ratio(n, shear, repeats=3):
+    """Best time of a braking batch / best time of a driving batch (n random cases each)."""
+    times = {}
+    for name, slips in (("driving", (0.0, 0.99)), ("braking", (-0.5, 0.0))):
+        wheel, snow, load, slip = in_range(n, seed=7, slip=slips)
+
+        def run(wheel=wheel, snow=snow, load=load, slip=slip):
+            sj.solve_wheel(wheel, snow, load, slip, shear=shear).status.block_until_ready()
+
+        run()
+        best = np.inf
+        for _ in range(repeats):
+            t = time.perf_counter()
+            run()
+            best = min(best, time.perf_counter() - t)
+        times[name] = best
+    return times["braking"] / times["driving"], times
+
+
+def gradient_check(n, shear):
+    """Non-finite entries of d(drawbar pull)/d(snow leaves, load, slip) over converged cases."""
+    wheel, snow, load, slip = in_range(n, seed=3)
+
+    def total(snow, load, slip):
+        st = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+        return jnp.sum(st.drawbar_pull), st.status
+
+    grads, status = jax.jit(jax.grad(total, argnums=(0, 1, 2), has_aux=True))(snow, load, slip)
+    ok = np.asarray(status) == Status.CONVERGED
+    leaves = [np.asarray(g)[ok] for g in jax.tree_util.tree_leaves(grads)]
+    return int(sum(np.sum(~np.isfinite(g)) for g in leaves)), int(ok.sum()) * len(leaves)
+
+
+def scipy_check(n, shear):
+    """Max |W_scipy(theta0) / load - 1| and max sinkage difference to brentq [m]."""
+    from tests import reference as ref  # noqa: PLC0415
+
+    wheel, snow, load, slip = in_range(n, seed=5)
+    st = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+    worst_w, worst_z = 0.0, 0.0
+    for k in np.flatnonzero(np.asarray(st.status) == Status.CONVERGED):
+        args = (
+            float(wheel.diameter[k]), float(wheel.width[k]), float(snow.p_w[k]),
+            float(snow.z_w[k]), float(snow.cohesion[k]), float(snow.tan_phi[k]),
+            float(snow.shear_modulus[k]),
+        )  # fmt: skip
+        w = ref.contact_integrals(float(st.entry_angle[k]), float(slip[k]), *args, shear)[0]
+        worst_w = max(worst_w, abs(w / float(load[k]) - 1))
+        sol = ref.solve(float(load[k]), float(slip[k]), *args, shear)
+        if sol is not None and slip[k] >= 0:  # braking W may have several roots
+            z_ref = args[0] / 2 * (1 - np.cos(sol[0]))
+            worst_z = max(worst_z, abs(z_ref - float(st.sinkage[k])))
+    return worst_w, worst_z
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=1_000_000, help="cases per shear model")
+    parser.add_argument("--no-readme", action="store_true")
+    args = parser.parse_args(argv)
+    console = Console()
+    n = args.cases
+    lines = [
+        f"{n:,} random in-range cases per shear model (slips -0.5 to 0.99), float64 and"
+        " float32; balance = |W(theta0) / load - 1| at convergence.",
+        "",
+        "| shear | family | cases | converged | bottomed out | angle limit | not converged"
+        " | NaN outside INVALID_INPUT (f64 / f32) | max balance | float32 sinkage error"
+        " (median / 99.9 % / max) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    costs, grads, refs = [], [], []
+    for shear in track(SHEARS, description="robustness", console=console):
+        wheel, snow, load, slip = in_range(n, seed=11)
+        st64 = solve_in_chunks(wheel, snow, load, slip, shear)
+        cast = lambda t: jax.tree_util.tree_map(lambda x: np.asarray(x, np.float32), t)  # noqa: E731
+        st32 = solve_in_chunks(cast(wheel), cast(snow), cast(load), cast(slip), shear)
+        bal = balance(wheel, snow, load, slip, st64["entry_angle"], shear)
+        for family, mask in (("driving", slip >= 0), ("braking", slip < 0)):
+            s64, s32 = st64["status"][mask], st32["status"][mask]
+            counts = [int(np.sum(s64 == s)) for s in (0, 1, 2, 3)]
+
+            def nan_outside(st, mask=mask):
+                bad = np.zeros(mask.sum(), bool)
+                for f in FIELDS:
+                    bad |= ~np.isfinite(st[f][mask])
+                return int(np.sum(bad & (st["status"][mask] != Status.INVALID_INPUT)))
+
+            conv = s64 == Status.CONVERGED
+            both = conv & (s32 == Status.CONVERGED)
+            rel = np.abs(st32["sinkage"][mask][both] / st64["sinkage"][mask][both] - 1)
+            q = np.quantile(rel, [0.5, 0.999]) if rel.size else [np.nan, np.nan]
+            lines.append(
+                f"| {shear} | {family} | {mask.sum():,} | {counts[0]:,} | {counts[1]:,} |"
+                f" {counts[2]:,} | {counts[3]:,} | {nan_outside(st64)} / {nan_outside(st32)} |"
+                f" {np.max(bal[mask][conv]):.1e} | {q[0]:.1e} / {q[1]:.1e} /"
+                f" {np.max(rel) if rel.size else np.nan:.1e} |"
+            )
+        ratio, times = cost_ratio(min(n, 100_000), shear)
+        costs.append(
+            f"{shear}: {ratio:.2f} ({times['braking'] * 1e3:.0f} ms vs"
+            f" {times['driving'] * 1e3:.0f} ms)"
+        )
+        if shear != "none":
+            bad, total = gradient_check(10_000, shear)
+            grads.append(f"{shear}: {bad} of {total:,}")
+            worst_w, worst_z = scipy_check(100, shear)
+            refs.append(f"{shear}: balance {worst_w:.1e}, sinkage {worst_z:.1e} m")
+    lines += [
+        "",
+        f"* Braking / driving time per batch of {min(n, 100_000):,}: " + "; ".join(costs) + ".",
+        "* Non-finite gradient entries (drawbar pull w.r.t. the five snow parameters, load"
+        " and slip) over converged cases of 10,000: " + "; ".join(grads) + ".",
+        "* Against SciPy (quad + brentq) on 100 cases: max |W_scipy(theta0) / load - 1| and"
+        " max sinkage difference (driving; braking W can have several roots): "
+        + "; ".join(refs)
+        + ".",
+        f"* Measured {time.strftime('%Y-%m-%d')} with `python benchmarks/robustness.py"
+        f" --cases {n}`.",
+    ]
+    text = "\n".join(lines)
+    console.print(text)
+    if not args.no_readme:
+        readme = ROOT / "README.md"
+        content = readme.read_text()
+        start, end = "<!-- robustness:start -->", "<!-- robustness:end -->"
+        if start not in content:
+            raise SystemExit(f"README.md has no {start} marker")
+        head, rest = content.split(start, 1)
+        _, tail = rest.split(end, 1)
+        readme.write_text(f"{head}{start}\n{text}\n{end}{tail}")
+
+
+if __name__ == "__main__":
+    main()
