@@ -96,3 +96,23 @@ def test_values_the_working_precision_cannot_carry_are_invalid(field, value):
     st = jax.jit(lambda s: sj.solve_wheel(WHEEL, s, 5000.0, 0.3))(batch)
     assert list(np.asarray(st.status)) == [sj.Status.INVALID_INPUT, sj.Status.CONVERGED]
     assert np.isnan(st.sinkage[0]) and np.isfinite(st.sinkage[1])
+
+
+def test_reused_parameter_sets_are_still_checked_with_each_load_and_slip():
+    """A wheel and terrain already validated are not re-checked, but loads and slips are,
+    and a different (invalid) terrain object is checked afresh."""
+    snow = sj.WongSnow(85e3, 0.2, 18e3, 0.08, 0.01)
+    sj.solve_wheel(WHEEL, snow, 4e3, 0.3)
+    with pytest.raises(ValueError, match="load must be finite and > 0 N"):
+        sj.solve_wheel(WHEEL, snow, -4e3, 0.3)
+    with pytest.raises(ValueError, match=re.escape("slip must be finite and in [-1, 1]")):
+        sj.solve_wheel(WHEEL, snow, 4e3, 1.5)
+    del snow
+    bad = sj.WongSnow(-85e3, 0.2, 18e3, 0.08, 0.01)
+    with pytest.raises(ValueError, match="snow.p_w must be finite and > 0 Pa"):
+        sj.solve_wheel(WHEEL, bad, 4e3, 0.3)
+    # The simplified model needs c > 0: the same terrain is checked again for it.
+    no_cohesion = sj.WongSnow(85e3, 0.2, 0.0, 0.08, 0.01)
+    sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3)
+    with pytest.raises(ValueError, match="snow.cohesion must be finite and > 0 Pa"):
+        sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3, shear="simplified")
