@@ -106,12 +106,6 @@ def test_contact_integrals_match_scipy_quad(integral_cases, shear):
         np.testing.assert_array_equal(got[:, 2:], 0.0)
         scale, got, want = scale[:, :2], got[:, :2], want[:, :2]
     err = (np.abs(got - want) / scale).max(axis=1)
-    braking = x["slip"] < 0
-    if shear == "simplified":
-        # The mirrored simplified law for braking is snowjax's extension, not the thesis's;
-        # its documented accuracy at the default node count is 1e-4.
-        assert err[braking].max() <= 1e-4, err[braking].max()
-        err = err[~braking]
     assert err.max() <= 1e-7, (shear, err.max())
     np.testing.assert_allclose(
         sj.contact_forces(wheel, snow, x["theta0"], x["slip"], shear).drawbar_pull,
@@ -543,3 +537,39 @@ def test_braking_reaches_the_balance_it_checks():
     w = sj.contact_forces(wheel, snow, st.entry_angle, slip).vertical_load
     assert abs(float(w) / load - 1) <= 1e-12
     assert abs(float(st.sinkage) - 0.1844685477) <= 1e-10
+
+
+@pytest.mark.parametrize("shear", ["classic", "simplified"])
+def test_braking_gradients_match_central_differences(shear):
+    """Random in-range braking cases: forward-mode derivatives of the drawbar pull w.r.t.
+    z_w, p_w, cohesion, tan phi and the load against central differences, scaled by the
+    force level (|p| |d DP/dp| / (|R| + |T|)).  The simplified model's shear layer near
+    the sign change of U0 used to be under-resolved (errors up to 2e-3 of the force
+    level; 1e-2 relative)."""
+    x = random_inputs(48, seed=21)
+    x["slip"] = -np.abs(x["slip"]) * 0.5 / 0.99
+    x["load"] = np.minimum(x["load"], 3e3)  # mostly carried, not bottomed out
+    names = ("z_w", "p_w", "c", "tan_phi", "load")
+
+    def drawbar_pull(p):
+        q = x | p
+        wheel = sj.RigidWheel(q["D"], q["b"])
+        snow = sj.WongSnow(q["p_w"], q["z_w"], q["c"], q["tan_phi"], q["K"])
+        st = sj.solve_wheel(wheel, snow, q["load"], q["slip"], shear=shear)
+        return st.drawbar_pull, st.motion_resistance + jnp.abs(st.thrust), st.status
+
+    f = jax.jit(drawbar_pull)
+    derivative = jax.jit(lambda p, t: jax.jvp(drawbar_pull, (p,), (t,))[1][0])
+    p0 = {k: jnp.asarray(x[k]) for k in names}
+    _, force, status = f(p0)
+    ok = np.asarray(status) == Status.CONVERGED
+    assert ok.sum() >= 20
+    for name in names:
+        tangent = {k: jnp.zeros_like(v) for k, v in p0.items()} | {name: jnp.ones_like(p0[name])}
+        d = derivative(p0, tangent)
+        h = 1e-6 * np.abs(x[name])
+        up = f(p0 | {name: jnp.asarray(x[name] + h)})[0]
+        dn = f(p0 | {name: jnp.asarray(x[name] - h)})[0]
+        fd = (np.asarray(up) - np.asarray(dn)) / (2 * h)
+        err = np.abs(np.asarray(d) - fd) * np.abs(x[name]) / np.asarray(force)
+        assert err[ok].max() <= 1e-5, (shear, name, err[ok].max())

@@ -545,8 +545,7 @@ def solve_wheel(
       (two-panel, four-panel): classic (10, 10), simplified (24, 16), none (8, -).  Other
       terrains / Wong–Reece: 12 nodes per half-panel, 16 when the batch brakes.  With
       the defaults every contact integral is within 1e-7 (relative) of adaptive
-      quadrature over the documented range, except the braking extension of the
-      simplified model (not defined by the thesis), within 1e-4.  An integer sets all.
+      quadrature over the documented range.  An integer sets all.
     - `max_steps`: Newton iteration limit.
     - `initial_entry_angle`: optional warm start theta0 [rad] (broadcasts like `load`),
       e.g. the previous time step's `entry_angle` inside a simulation; it replaces the
