@@ -124,6 +124,8 @@ def _s_min(dtype) -> float:
     (the base itself, where Wong's pressure is infinite); 1e-3 keeps theta0 <= (1 - 1e-6)
     theta_cap."""
     return S_MIN if jnp.dtype(dtype) == jnp.float64 else 1e-3
+
+
 S_MAX = 4.0  # theta0 = 1.1e-7 theta_cap: a contact that carries next to nothing
 
 
