@@ -167,14 +167,10 @@ def main(argv=None) -> None:
     table = "\n".join(lines)
     print(table)
     if args.readme:
-        readme = ROOT / "README.md"
-        text = readme.read_text()
-        start, end = f"<!-- {args.marker}:start -->", f"<!-- {args.marker}:end -->"
-        if start not in text:
-            raise SystemExit(f"README.md has no {start} marker")
-        head, rest = text.split(start, 1)
-        _, tail = rest.split(end, 1)
-        readme.write_text(f"{head}{start}\n{table}\n{end}{tail}")
+        sys.path.insert(0, str(ROOT / "benchmarks"))
+        from readme_block import write_block  # noqa: PLC0415
+
+        write_block(args.marker, table)
 
 
 if __name__ == "__main__":

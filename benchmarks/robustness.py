@@ -32,6 +32,7 @@ jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 from cases import in_range  # noqa: E402
+from readme_block import write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 
@@ -190,14 +191,7 @@ def main(argv=None):
     text = "\n".join(lines)
     console.print(text)
     if not args.no_readme:
-        readme = ROOT / "README.md"
-        content = readme.read_text()
-        start, end = "<!-- robustness:start -->", "<!-- robustness:end -->"
-        if start not in content:
-            raise SystemExit(f"README.md has no {start} marker")
-        head, rest = content.split(start, 1)
-        _, tail = rest.split(end, 1)
-        readme.write_text(f"{head}{start}\n{text}\n{end}{tail}")
+        write_block("robustness", text)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
+from readme_block import write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 from rich.table import Table  # noqa: E402
@@ -358,16 +359,8 @@ def main(argv=None):
     if args.json:
         args.json.write_text(json.dumps(dict(numbers, machine=where), indent=2))
     if not args.no_readme:
-        readme = ROOT / "README.md"
-        text = readme.read_text()
-        start, end = "<!-- benchmarks:start -->", "<!-- benchmarks:end -->"
-        if start in text and end in text:
-            head, rest = text.split(start, 1)
-            _, tail = rest.split(end, 1)
-            readme.write_text(f"{head}{start}\n{markdown}\n{end}{tail}")
-            console.print(f"updated {readme}")
-        else:
-            console.print("README.md has no benchmark markers; table not written")
+        write_block("benchmarks", markdown)
+        console.print("updated README.md")
     return 0
 
 
