@@ -96,3 +96,21 @@ def test_converged_or_flagged_never_nan_and_finite_gradients(cases, dtype):
             for name in ("p_w", "z_w", "cohesion", "tan_phi", "shear_modulus"):
                 g = np.asarray(getattr(grads[shear], name))
                 assert np.all(np.isfinite(g[converged])), (shear, name, g[converged])
+
+
+def test_float32_gradient_at_a_vanishing_braking_slip_is_finite():
+    """Found by the property test: a float32 slip of -1.7e-36 made the simplified model's
+    braking layout overflow (level / (tau1 B) with B ~ -slip / 3) in the capacity check,
+    whose NaN did not show in the values but poisoned every gradient."""
+    f32 = np.float32
+    wheel = sj.RigidWheel(f32(0.5), f32(0.5))
+
+    def drawbar_pull(p_w, slip):
+        snow = sj.WongSnow(p_w, f32(0.05), f32(np.exp(5)), f32(0.5), f32(np.exp(-5)))
+        return sj.solve_wheel(wheel, snow, f32(np.exp(5)), slip, shear="simplified").drawbar_pull
+
+    grad = jax.jit(jax.grad(drawbar_pull, argnums=(0, 1)))
+    tiny, zero = grad(f32(np.exp(9)), f32(-1.7339896679487998e-36)), grad(f32(np.exp(9)), f32(0))
+    for g_tiny, g_zero in zip(tiny, zero):
+        assert np.isfinite(g_tiny)
+        np.testing.assert_allclose(g_tiny, g_zero, rtol=1e-4)

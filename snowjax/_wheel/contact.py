@@ -382,7 +382,9 @@ def _simplified_layout(theta0, slip, diameter, snow, z0_rel, a, entry_scale):
     bb = jnp.maximum(jnp.abs(big_b), tiny)
 
     def s_at(level):
-        c3 = jnp.cbrt(level / (tau1 * bb))
+        # cbrt of each factor: B ~ -i / 3 can be ~1e-37 (float32 slip of -1e-36), and
+        # level / (tau1 B) would overflow.
+        c3 = jnp.cbrt(level / tau1) / jnp.cbrt(bb)
         s = jnp.where(
             sign_change, s_root + c3, jnp.minimum(c3, level / jnp.maximum(-tau1 * aa, tiny))
         )

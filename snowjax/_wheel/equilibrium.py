@@ -49,6 +49,7 @@ from .inputs import (
     _check_model,
     _check_options,
     _is_thesis_path,
+    _magnitude_window,
     _numeric_argument,
     _valid_mask,
     _validate_eagerly,
@@ -305,6 +306,15 @@ def _safe_inputs(valid, wheel, terrain, load, slip, distribution=None):
     return wheel, terrain, pick(load, 5000.0), pick(slip, 0.2), distribution
 
 
+def _flush_tiny_slip(slip):
+    """Slips below the input magnitude window (1.2e-77 in float64, 1.1e-10 in float32) are
+    0 in value, keeping the gradient 1: the braking quadrature's layout divides by
+    quantities proportional to the slip, which underflow for a float32 slip of 1e-38."""
+    small, _ = _magnitude_window(slip.dtype)
+    flushed = jnp.where(jnp.abs(slip) < small, 0.0, slip)
+    return slip + jax.lax.stop_gradient(flushed - slip)
+
+
 # Elements solved together in one Newton iteration.  Chunks keep the quadrature's
 # (chunk, nodes) intermediates in cache and let each chunk stop iterating on its own.
 CHUNK_SIZE = 2048
@@ -333,6 +343,7 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
     )
     valid = _valid_mask(wheel, snow, None, load, slip, shear)
     wheel, snow, load, slip, _ = _safe_inputs(valid, wheel, snow, load, slip)
+    slip = _flush_tiny_slip(slip)
 
     theta0, r, t, m, status = _in_chunks(
         lambda ops: _solve_batch(*ops, shear=shear, n=n, max_steps=max_steps, layout=layout),
