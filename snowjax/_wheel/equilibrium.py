@@ -575,7 +575,11 @@ def solve_wheel(
     `distribution.c1 + c2 * slip`, ...); a wrong type raises `TypeError` (lists and
     Python scalars are accepted; None, strings, booleans and complex numbers are not),
     shapes that do not broadcast raise `ValueError` naming them, and an empty batch
-    returns empty fields.  A refused terrain / distribution / shear combination raises
+    returns empty fields.  A value whose fourth power over- or underflows the working
+    precision (magnitudes above 1.1e77 or below 1.2e-77 in float64, 1.4e9 / 1.1e-10 in
+    float32; 0 is allowed) is invalid; on `WongSnow` without a distribution a slip below
+    that lower limit counts as 0.
+    A refused terrain / distribution / shear combination raises
     `ValueError`.  Under `jax.jit`/`jax.vmap` invalid elements get `Status.INVALID_INPUT`
     and NaN fields instead, and the rest of the batch is solved normally.  A load beyond
     the capacity of a snow layer gives `Status.BOTTOMED_OUT` with `sinkage = depth`; one
