@@ -205,11 +205,14 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     reaches_base = theta_base <= MAX_ENTRY_ANGLE
     n_nodes = n[braking]
 
-    def vertical_load(theta0) -> Array:
+    def w_batch(theta0, i, d, b, sn) -> Array:  # W of every element, explicit parameters
         fn = lambda th, i, d, b, sn: _contact_scalar(  # noqa: E731
             th, i, d, b, sn, shear, n_nodes, None, braking, vertical_only=True
         )
-        return cast(Array, jax.vmap(fn)(theta0, slip, diameter, width, snow))
+        return cast(Array, jax.vmap(fn)(theta0, i, d, b, sn))
+
+    def vertical_load(theta0) -> Array:
+        return w_batch(theta0, slip, diameter, width, snow)
 
     def all_forces(theta0, bottomed):
         fn = lambda th, i, d, b, sn, bt: _contact_scalar(  # noqa: E731
@@ -237,12 +240,8 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     target = jnp.where(over, 0.5 * capacity, load)
 
     def residual(s, params):
-        th_cap, tgt, i, d, b, sn = params
-        fn = lambda th, i, d, b, sn: _contact_scalar(  # noqa: E731
-            th, i, d, b, sn, shear, n_nodes, None, braking, vertical_only=True
-        )
-        w = jax.vmap(fn)(_theta_from_s(s, th_cap), i, d, b, sn)
-        return _balance_residual(w, tgt)
+        th_cap, tgt, *element = params
+        return _balance_residual(w_batch(_theta_from_s(s, th_cap), *element), tgt)
 
     if guess is None:
         s0 = _initial_guess(theta_cap, target, diameter, width, snow)
@@ -405,11 +404,14 @@ def _solve_general_layout(
     reaches_base = theta_base <= MAX_ENTRY_ANGLE
     fractions = None if distribution is None else distribution.angle_fractions(slip)
 
-    def contact(theta0, vertical_only):
+    def contact_batch(theta0, vertical_only, i, d, b, tr, fr):  # explicit parameters
         fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
             th, i, d, b, tr, fr, shear, n, braking, vertical_only
         )
-        return jax.vmap(fn)(theta0, slip, diameter, width, terrain, fractions)
+        return jax.vmap(fn)(theta0, i, d, b, tr, fr)
+
+    def contact(theta0, vertical_only):
+        return contact_batch(theta0, vertical_only, slip, diameter, width, terrain, fractions)
 
     def vertical(theta0) -> Array:  # W alone
         return cast(Array, contact(theta0, True))
@@ -445,11 +447,9 @@ def _solve_general_layout(
         s0 = _warm_start(guess, theta_cap)
 
     def residual(s, params):
-        th_cap, tgt, i, d, b, tr, fr = params
-        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
-            th, i, d, b, tr, fr, shear, n, braking, True
-        )
-        return _balance_residual(jax.vmap(fn)(_theta_from_s(s, th_cap), i, d, b, tr, fr), tgt)
+        th_cap, tgt, *element = params
+        w = cast(Array, contact_batch(_theta_from_s(s, th_cap), True, *element))
+        return _balance_residual(w, tgt)
 
     s = solve_elementwise(
         residual,
