@@ -573,3 +573,21 @@ def test_braking_gradients_match_central_differences(shear):
         fd = (np.asarray(up) - np.asarray(dn)) / (2 * h)
         err = np.abs(np.asarray(d) - fd) * np.abs(x[name]) / np.asarray(force)
         assert err[ok].max() <= 1e-5, (shear, name, err[ok].max())
+
+
+def test_simplified_braking_sign_change_next_to_the_axle():
+    """Simplified shear, slip -0.013 on a wheel 6e-13 of z_w from bottoming out: U0
+    changes sign 2.3e-4 rad from the axle (2e-4 theta0).  Such a sign change used to be
+    left to the first panel, which missed the jump of the mobilisation from -1 to +1
+    there: thrust 1.4e-3 below adaptive quadrature.  Now 2.4e-6 (reference: SciPy quad)."""
+    x = random_inputs(300, seed=5, near_bottom=0.5)
+    k = 46
+    slip = -abs(x["slip"][k]) * 0.5 / 0.99
+    args = [x[q][k] for q in ("D", "b", "p_w", "z_w", "c", "tan_phi", "K")]
+    wheel = sj.RigidWheel(*args[:2])
+    snow = sj.WongSnow(*args[2:])
+    got = sj.contact_forces(wheel, snow, x["theta0"][k], slip, "simplified")
+    want = ref.contact_integrals(x["theta0"][k], slip, *args, "simplified")
+    got = np.array([got.vertical_load, got.motion_resistance, got.thrust, got.torque])
+    assert slip == pytest.approx(-0.013262, rel=1e-4)  # the case described above
+    np.testing.assert_allclose(got, want, rtol=3e-6)

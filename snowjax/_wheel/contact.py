@@ -26,8 +26,9 @@ integrands, which live inside the shear layer and so are larger than the values'
 where the layer is thin: measured against the exact model (SciPy quad + brentq) on
 random in-range cases, equilibrium gradients are within 6e-7 relative for the simplified
 model (whose braking panels end where |U0| saturates, see `_simplified_layout`), and
-within 5e-5 relative (1e-4 of the force level) for classic braking at its default 10
-nodes per panel, where the panels are placed by the linear width of the shear layer.
+within 1.2e-4 relative (d/dK; 1.3e-5 for d/dc, 9e-6 for d/dslip, below 1e-6 for the
+rest; worst of 161 cases) for classic braking at its default nodes, where the panels
+are placed by the linear width of the shear layer (`_classic_layout`).
 """
 
 from __future__ import annotations
@@ -52,21 +53,26 @@ from .geometry import RigidWheel
 ShearModel = Literal["classic", "simplified", "none"]
 SHEAR_MODELS = ("classic", "simplified", "none")
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
-# four-panel rule otherwise), chosen so that every contact integral stays within 1e-7 of
-# adaptive quadrature over the documented range (tests; measured worst cases: classic
-# 4e-8 / 7e-9, simplified 3e-9 driving, none 4e-10).  The simplified model's cubic
-# exponent makes its shear layer steeper, hence more nodes.
-DEFAULT_NODES_PER_PANEL = {"classic": (10, 10), "simplified": (24, 16), "none": (8, 8)}
+# four-panel rule otherwise: one count per panel, axle to entry), chosen so that every
+# contact integral stays within 1e-7 of adaptive quadrature over the documented range
+# (tests; measured worst cases: classic 4e-8 / 9e-8, simplified 3e-9 driving, none
+# 4e-10).  The simplified model's cubic exponent makes its shear layer steeper, hence
+# more nodes; the classic model's entry panel needs only 8.
+DEFAULT_NODES_PER_PANEL = {
+    "classic": (10, (10, 10, 10, 8)),
+    "simplified": (24, (16, 16, 16, 16)),
+    "none": (8, (8, 8, 8, 8)),
+}
 
 
-def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, int]:
-    """(nodes per panel of the two-panel rule, of the four-panel rule)."""
+def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, tuple[int, ...]]:
+    """(nodes per panel of the two-panel rule, nodes of each panel of the four-panel rule)."""
     if nodes_per_panel is None:
         return DEFAULT_NODES_PER_PANEL[shear]
     n = int(nodes_per_panel)
     if n < 2:
         raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
-    return n, n
+    return n, (n, n, n, n)
 
 
 def _check_shear(shear: str) -> None:
@@ -79,6 +85,12 @@ def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
     """Nodes on [0, 1] and weights (summing to 1) of the n-point Gauss–Legendre rule."""
     u, w = np.polynomial.legendre.leggauss(n)
     return (u + 1) / 2, w / 2
+
+
+def _rule(n: int, dtype) -> tuple[Array, Array]:
+    """`_gauss_legendre(n)` as arrays of `dtype`."""
+    t, w = _gauss_legendre(n)
+    return jnp.asarray(t, dtype=dtype), jnp.asarray(w, dtype=dtype)
 
 
 # --------------------------------------------------------------------------------------
@@ -288,47 +300,60 @@ def _sinh_panel(t, w, lo, hi, scale, toward_hi):
     return x, jac
 
 
-def _braking_split(theta0, slip, diameter, snow, shear, z0_rel, a):
-    """Angle where the classic shear stress changes sign (braking only) and the layer width there.
+def _axle_gap(dtype) -> float:
+    """Sign changes of the shear stress closer to the axle than this fraction of theta0 are
+    left to the first panel (which then misses a layer at most that wide).  1e-9 in
+    float64; 1e-3 in float32, where a split closer to the axle would put nodes so close
+    to theta = 0 that sin^2(theta / 2) underflows (infinite pressure on a bottomed-out
+    wheel)."""
+    return 1e-9 if jnp.dtype(dtype) == jnp.float64 else 1e-3
 
-    (The simplified model's layout is `_simplified_layout`.)
 
-    Returns (split angle, layer scale) with the split at theta0 / 2 and an infinite
-    scale when the shear stress has one sign over the whole contact.
+def _classic_layout(theta0, slip, diameter, snow, entry_scale):
+    """Panel ends and sinh scales of the four-panel rule for the classic model.
+
+    The shear displacement j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta),
+    k = 1 - i, vanishes at the entry; for a braked wheel with k cos theta0 > 1 it rises
+    from the entry to a maximum at theta* = arccos(1 / k) and, if j(0) < 0, falls through
+    zero at the split below theta* (backward shear near the axle, a kink in the stress).
+    Panels: [0, split / 2] (quadratic map at the axle), [split / 2, split] and
+    [split, b3] clustered at the split with the linear layer width
+    K / (r |dj/dtheta|), and [b3, theta0] clustered at the entry with twice the entry
+    layer width.  b3 is theta*, kept within the middle 60 % of [split, theta0]: each of
+    the last two panels then holds one monotone branch of j.  Without a sign change the
+    split is theta0 / 2 and b3 the midpoint of [split, theta0].
+
+    Returns (b1, split, b3, scale2, scale3, scale4).
     """
     r = diameter / 2
-    no_split = (theta0 / 2, jnp.inf)
-    if shear == "none":
-        return no_split
-    if shear == "classic":
-        # j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta), k = 1 - i.
-        k = 1 - slip
-        sin_theta0 = jnp.sin(theta0)
-        theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
-        has_root = (slip < 0) & (theta0 - k * sin_theta0 < 0) & (theta_star < theta0)
+    # j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta), k = 1 - i.
+    k = 1 - slip
+    sin_theta0 = jnp.sin(theta0)
+    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
+    has_root = (slip < 0) & (theta0 - k * sin_theta0 < 0) & (theta_star < theta0)
 
-        def f_and_slope(th):  # 0 <= th <= theta0 < pi / 2: the Taylor sine and cosine
-            half_sin, half_cos = _sincos_half(th)
-            sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
-            return (theta0 - th) - k * (sin_theta0 - sin), -1 + k * cos
+    def f_and_slope(th):  # 0 <= th <= theta0 < pi / 2: the Taylor sine and cosine
+        half_sin, half_cos = _sincos_half(th)
+        sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+        return (theta0 - th) - k * (sin_theta0 - sin), -1 + k * cos
 
-        # f is concave and increasing on [0, theta_star]: Newton from 0 converges
-        # monotonically from the left.
-        def newton(_, th):
-            f, slope = f_and_slope(th)
-            return jnp.minimum(th - f / jnp.maximum(slope, 1e-12), theta_star)
+    # f is concave and increasing on [0, theta_star]: Newton from 0 converges
+    # monotonically from the left.
+    def newton(_, th):
+        f, slope = f_and_slope(th)
+        return jnp.minimum(th - f / jnp.maximum(slope, 1e-12), theta_star)
 
-        th = jax.lax.fori_loop(0, 8, newton, jnp.zeros_like(theta0))
-        slope = jnp.abs(f_and_slope(th)[1])
-        scale = snow.shear_modulus / (r * jnp.maximum(slope, 1e-12))
-    # A sign change within 1e-3 theta0 of the axle is left to the first panel, whose
-    # quadratic map already clusters nodes there: splitting at it would put nodes so close
-    # to theta = 0 that sin^2(theta / 2) underflows in float32 (infinite pressure on a
-    # bottomed-out wheel).
-    has_root = has_root & (th > 1e-3 * theta0)
-    split = jnp.where(has_root, th, no_split[0])
-    scale = jnp.where(has_root, scale, jnp.inf)
-    return split, scale
+    th = jax.lax.fori_loop(0, 8, newton, jnp.zeros_like(theta0))
+    slope = jnp.abs(f_and_slope(th)[1])
+    split_scale = snow.shear_modulus / (r * jnp.maximum(slope, 1e-12))
+    has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
+    split = jnp.where(has_root, th, theta0 / 2)
+    gap = theta0 - split
+    b3 = jnp.where(
+        has_root, jnp.clip(theta_star, split + 0.2 * gap, theta0 - 0.2 * gap), split + 0.5 * gap
+    )
+    scale = jnp.where(has_root, split_scale, jnp.inf)
+    return split / 2, split, b3, scale, scale, 2 * entry_scale
 
 
 # Level of |U0| beyond which the mobilisation is saturated to rounding: exp(-40) = 4e-18.
@@ -371,27 +396,27 @@ def _simplified_layout(theta0, slip, diameter, snow, z0_rel, a, entry_scale):
     s_root = jnp.sqrt(jnp.where(sign_change, big_a / jnp.where(sign_change, big_b, 1.0), 0.0))
     th_root = _theta_at_sigma_bar(s_root, snow, z0_rel, a)
     z_root = jnp.exp(-snow.cohesion / snow.p_w * s_root)
-    # As for the classic model, a sign change within 1e-3 theta0 of the axle is left to
-    # the first panel.
-    has_root = sign_change & (z_root > z0_rel) & (th_root < theta0) & (th_root > 1e-3 * theta0)
+    gap = _axle_gap(theta0.dtype) * theta0
+    has_root = sign_change & (z_root > z0_rel) & (th_root < theta0) & (th_root > gap)
     # |U0| = tau1 s (bb s^2 - aa) beyond the root (s > s_r), or from the entry when U0 has
     # one sign; increasing and convex there, so Newton from an upper bound converges
     # monotonically: s_r + cbrt(level / (tau1 B)) beyond a root, else the smaller of
     # cbrt(level / (tau1 |B|)) and level / (tau1 |A|) (within a factor 2 of the root).
-    aa = jnp.where(sign_change, big_a, -jnp.abs(big_a))
+    # A sign change left to the first panel counts as none: the levels are then those of
+    # the upper bound tau1 s (|A| + |B| s^2) of |U0|, reached from the entry.
+    aa = jnp.where(has_root, big_a, -jnp.abs(big_a))
     bb = jnp.maximum(jnp.abs(big_b), tiny)
+    s_floor = jnp.where(has_root, s_root, 0.0)
 
     def s_at(level):
         # cbrt of each factor: B ~ -i / 3 can be ~1e-37 (float32 slip of -1e-36), and
         # level / (tau1 B) would overflow.
         c3 = jnp.cbrt(level / tau1) / jnp.cbrt(bb)
-        s = jnp.where(
-            sign_change, s_root + c3, jnp.minimum(c3, level / jnp.maximum(-tau1 * aa, tiny))
-        )
+        s = jnp.where(has_root, s_root + c3, jnp.minimum(c3, level / jnp.maximum(-tau1 * aa, tiny)))
         for _ in range(8):
             f = tau1 * s * (bb * s**2 - aa) - level
             slope = jnp.maximum(tau1 * (3 * bb * s**2 - aa), tiny)
-            s = jnp.maximum(s - f / slope, s_root)
+            s = jnp.maximum(s - f / slope, s_floor)
         return s
 
     th_1 = _theta_at_sigma_bar(s_at(1.0), snow, z0_rel, a)
@@ -435,16 +460,15 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
     singularity theta = 0 and [theta0/2, theta0] with a sinh map clustering them in the
     shear layer behind the entry angle.  `braking=True`: four panels split at the sign
     change of the shear stress (or at theta0 / 2 when there is none), with sinh maps
-    clustering nodes on both sides of it.
+    clustering nodes on both sides of it (`_classic_layout`, `_simplified_layout`); `n`
+    is then one count per panel (axle to entry) or one for all four.
     """
     theta0, slip, diameter, snow, z0_rel, a = jax.lax.stop_gradient(
         (theta0, slip, diameter, snow, z0_rel, a)
     )
-    t, w = _gauss_legendre(n)
-    t = jnp.asarray(t, dtype=theta0.dtype)
-    w = jnp.asarray(w, dtype=theta0.dtype)
     entry_scale = _entry_scale(theta0, slip, diameter, snow, shear, a)
     if not braking:
+        t, w = _rule(n, theta0.dtype)
         half = theta0 / 2
         x2, w2 = _sinh_panel(t, w, half, theta0, entry_scale, True)
         return (
@@ -455,21 +479,25 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
         b1, split, b3, scale2, scale3, scale4 = _simplified_layout(
             theta0, slip, diameter, snow, z0_rel, a, entry_scale
         )
-    else:
-        split, split_scale = _braking_split(theta0, slip, diameter, snow, shear, z0_rel, a)
-        b1, b3 = split / 2, (split + theta0) / 2
-        scale2, scale3, scale4 = split_scale, split_scale, entry_scale
+    elif shear == "classic":
+        b1, split, b3, scale2, scale3, scale4 = _classic_layout(
+            theta0, slip, diameter, snow, entry_scale
+        )
+    else:  # no shear stress, no layer: four equal panels
+        b1, split, b3 = theta0 / 4, theta0 / 2, 0.75 * theta0
+        scale2 = scale3 = scale4 = jnp.full_like(theta0, jnp.inf)
     # Panel 1: [0, b1], quadratic map clustering at the log singularity theta = 0;
-    # panels 2-4 (one vectorised sinh map): towards the split from below and above, and
-    # towards the entry angle.
-    lo = jnp.stack([b1, split, b3])[:, None]
-    hi = jnp.stack([split, b3, theta0])[:, None]
-    scale = jnp.stack([scale2, scale3, scale4])[:, None]
-    toward_hi = np.array([True, False, True])[:, None]
-    x, jac = _sinh_panel(t, w, lo, hi, scale, toward_hi)
+    # panels 2-4 (sinh maps): towards the split from below and above, and towards the
+    # entry angle.  (One call per panel: a stacked (3, n) map costs XLA:CPU twice as
+    # much under vmap.)
+    counts = (n,) * 4 if isinstance(n, int) else n
+    (t1, w1), *rules = [_rule(m, theta0.dtype) for m in counts]
+    x2, j2 = _sinh_panel(*rules[0], b1, split, scale2, True)
+    x3, j3 = _sinh_panel(*rules[1], split, b3, scale3, False)
+    x4, j4 = _sinh_panel(*rules[2], b3, theta0, scale4, True)
     return (
-        jnp.concatenate([b1 * t**2, x.reshape(-1)]),
-        jnp.concatenate([b1 * 2 * t * w, jac.reshape(-1)]),
+        jnp.concatenate([b1 * t1**2, x2, x3, x4]),
+        jnp.concatenate([b1 * 2 * t1 * w1, j2, j3, j4]),
     )
 
 

@@ -555,7 +555,8 @@ def solve_wheel(
     - `distribution`: None (front region, the thesis) or `WongReece(c1, c2, c3)`.
     - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  `WongSnow` without
       a distribution: two panels when all slips are >= 0, four with braking; defaults
-      (two-panel, four-panel): classic (10, 10), simplified (24, 16), none (8, -).  Other
+      classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified 24 + 24 and
+      4 x 16, none 8 + 8.  Other
       terrains / Wong–Reece: 12 nodes per half-panel, 16 when the batch brakes.  With
       the defaults every contact integral is within 1e-7 (relative) of adaptive
       quadrature over the documented range.  An integer sets all.
