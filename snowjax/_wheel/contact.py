@@ -33,7 +33,6 @@ are placed by the linear width of the shear layer (`_classic_layout`).
 
 from __future__ import annotations
 
-import functools
 from typing import Literal
 
 import equinox as eqx
@@ -47,7 +46,7 @@ from .._terrain.base import Terrain
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
 from .distribution import WongReece
-from .general import _general_nodes_for, general_contact
+from .general import _general_nodes_for, _rule, general_contact
 from .geometry import RigidWheel
 
 ShearModel = Literal["classic", "simplified", "none"]
@@ -78,19 +77,6 @@ def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, tuple[int,
 def _check_shear(shear: str) -> None:
     if shear not in SHEAR_MODELS:
         raise ValueError(f"shear must be one of {SHEAR_MODELS}, got {shear!r}")
-
-
-@functools.cache
-def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """Nodes on [0, 1] and weights (summing to 1) of the n-point Gauss–Legendre rule."""
-    u, w = np.polynomial.legendre.leggauss(n)
-    return (u + 1) / 2, w / 2
-
-
-def _rule(n: int, dtype) -> tuple[Array, Array]:
-    """`_gauss_legendre(n)` as arrays of `dtype`."""
-    t, w = _gauss_legendre(n)
-    return jnp.asarray(t, dtype=dtype), jnp.asarray(w, dtype=dtype)
 
 
 # --------------------------------------------------------------------------------------
@@ -461,7 +447,7 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
     shear layer behind the entry angle.  `braking=True`: four panels split at the sign
     change of the shear stress (or at theta0 / 2 when there is none), with sinh maps
     clustering nodes on both sides of it (`_classic_layout`, `_simplified_layout`); `n`
-    is then one count per panel (axle to entry) or one for all four.
+    is then one count per panel, axle to entry (`_nodes_for`).
     """
     theta0, slip, diameter, snow, z0_rel, a = jax.lax.stop_gradient(
         (theta0, slip, diameter, snow, z0_rel, a)
@@ -490,8 +476,7 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
     # panels 2-4 (sinh maps): towards the split from below and above, and towards the
     # entry angle.  (One call per panel: a stacked (3, n) map costs XLA:CPU twice as
     # much under vmap.)
-    counts = (n,) * 4 if isinstance(n, int) else n
-    (t1, w1), *rules = [_rule(m, theta0.dtype) for m in counts]
+    (t1, w1), *rules = [_rule(m, theta0.dtype) for m in n]
     x2, j2 = _sinh_panel(*rules[0], b1, split, scale2, True)
     x3, j3 = _sinh_panel(*rules[1], split, b3, scale3, False)
     x4, j4 = _sinh_panel(*rules[2], b3, theta0, scale4, True)

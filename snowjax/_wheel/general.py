@@ -30,6 +30,7 @@ import functools
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jaxtyping import Array
 
 from .._terrain.layered import LayeredSnow
 from .._terrain.shear import _signed_mobilisation
@@ -52,8 +53,15 @@ def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, in
 
 @functools.cache
 def _gauss_legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """Nodes on [0, 1] and weights (summing to 1) of the n-point Gauss–Legendre rule."""
     u, w = np.polynomial.legendre.leggauss(n)
     return (u + 1) / 2, w / 2
+
+
+def _rule(n: int, dtype) -> tuple[Array, Array]:
+    """`_gauss_legendre(n)` as arrays of `dtype`."""
+    t, w = _gauss_legendre(n)
+    return jnp.asarray(t, dtype=dtype), jnp.asarray(w, dtype=dtype)
 
 
 def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype):
@@ -62,9 +70,7 @@ def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype):
     `lo`, `hi`, `scale_*` have shape (P,); returns arrays of shape (P * 2 * n,).
     Zero-length panels get zero weights.
     """
-    t, w = _gauss_legendre(n)
-    t = jnp.asarray(t, dtype)
-    w = jnp.asarray(w, dtype)
+    t, w = _rule(n, dtype)
     q = GRADING_POWER
     u = t**q
     du = q * t ** (q - 1) * w
