@@ -32,6 +32,7 @@ test-all: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py $(ARGS)
+	$(BIN)/python benchmarks/mjx.py $(ARGS)
 
 robustness: $(STAMP)
 	$(BIN)/python benchmarks/robustness.py $(ARGS)

@@ -1,3 +1,6 @@
+# pyright: reportAttributeAccessIssue=false
+# (mujoco is a C extension without type stubs: pyright cannot see its attributes; and
+# MJX's Data._impl is a union of backend types of which only the JAX one has efc_J.)
 """snowjax wheel forces inside MuJoCo MJX: `snowjax.mjx` (optional extra `snowjax[mjx]`).
 
 Not imported by `import snowjax`; `import snowjax.mjx` needs `pip install 'snowjax[mjx]'`
@@ -50,14 +53,18 @@ Only `integrator="Euler"` (MuJoCo's default) with implicit damping enabled is ac
 with any MJX settings and is the cheap choice for a few parameters (snow, controls).
 Reverse mode (`jax.grad`) works too, but MJX only allows it with `opt.iterations = 1` (its
 constraint solver is a `while_loop` otherwise); the shipped model uses up to 20 Newton
-iterations because with one the contact solve is too inexact for it (measured: the
-chassis bounces by centimetres), so differentiate it in forward mode.
+iterations because with one the contact solve is too inexact for it (measured: from
+rest the chassis jumps by 0.3 m), so differentiate it in forward mode.  Measured against
+central differences: the distance after 40 steps from rest with `load="contact"`, 8e-5
+(d/dp_w) and 3e-5 (d/dtan phi) relative; from 1 m/s with `load="contact"` d/dp_w differs
+by 0.6 % (d/dtan phi 6e-6), not reduced by a 1e-14 solver tolerance, cause not found;
+with the static loads 3e-4.  Reverse mode at `iterations = 1`: 1e-3.
 
 **Load transfer, measured.**  With `load="contact"` the shipped vehicle driven by 540 N m
-per wheel settles at 2,995 N on each front and 4,005 N on each rear wheel (the drive
-torques' reaction and the snow's resisting torques pitch it back): the front wheels then
-spin at 80 % slip while the rear ones roll at -1.8 %.  With the default (static load, no
-transfer) all four run at the 18.3 % slip `simulate_longitudinal` gives.
+per wheel from 1 m/s carries, after 0.2 s, 2,995 N on each front and 4,004 N on each rear
+wheel (the drive torques' reaction and the snow's resisting torques pitch it back), so the
+front wheels slip more than the rear ones.  With the default (static load, no transfer)
+all four run at the 18.3 % slip `simulate_longitudinal` gives.
 
 **Lateral force.**  The rigid-wheel model gives no lateral force: `MjxWheelForces.slip_angle`
 is reported but nothing is applied sideways, so use it on vehicles whose lateral motion
@@ -66,7 +73,9 @@ is constrained (the shipped model is planar: x, z, pitch) or add your own latera
 
 from __future__ import annotations
 
+import contextlib
 import importlib.resources
+import io
 from collections.abc import Sequence
 
 import equinox as eqx
@@ -77,15 +86,23 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 try:
     import mujoco
-    from mujoco import mjx
+
+    # mujoco.mjx prints "Failed to import warp" when the optional GPU backend (NVIDIA
+    # Warp) is absent; the JAX backend used here does not need it.
+    with contextlib.redirect_stdout(io.StringIO()):
+        from mujoco import mjx
 except ImportError as exc:  # pragma: no cover - exercised only without the extra
     raise ImportError(
         "snowjax.mjx needs MuJoCo MJX: pip install 'snowjax[mjx]' (mujoco, mujoco-mjx)"
     ) from exc
 
-from ._contact import ShearModel, _check_shear
-from ._params import RigidWheel, WongSnow, _as_float
-from ._sim import DEFAULT_SPEED_EPS, wheel_forces
+from ._leaves import _as_float
+from ._sim.vehicle import DEFAULT_SPEED_EPS, wheel_forces
+from ._terrain.base import Terrain
+from ._wheel.contact import ShearModel
+from ._wheel.distribution import WongReece
+from ._wheel.equilibrium import _check_model
+from ._wheel.geometry import RigidWheel
 
 __all__ = [
     "MjxWheels",
@@ -100,8 +117,9 @@ __all__ = [
 
 def vehicle_model_path() -> str:
     """Path of the shipped MJCF model `snowjax/data/mjx_vehicle.xml`: a planar 4-wheel
-    vehicle (1,327 kg chassis, four 25 kg thesis tyres D = 0.736 m with I = 1.5 kg m^2,
-    wheelbase 2.6 m, track 1.6 m, motors `motor_fl/fr/rl/rr` in N m) on a flat floor."""
+    vehicle (1,327.6 kg chassis and four 25 kg thesis tyres, D = 0.736 m, b = 0.235 m,
+    I = 1.5 kg m^2; 3,500 N per wheel at rest; wheelbase 2.6 m, track 1.6 m; motors
+    `motor_fl/fr/rl/rr`, ctrl = torque [N m]) on a flat floor, g = 9.80665 m/s^2."""
     return str(importlib.resources.files("snowjax") / "data" / "mjx_vehicle.xml")
 
 
@@ -216,15 +234,20 @@ class MjxWheels(eqx.Module):
                 raise ValueError(f"axis of wheel {name!r} must be a non-zero 3-vector")
             axis = axis / np.linalg.norm(axis)
             geoms = [
-                g for g in range(model.ngeom)
-                if model.geom_bodyid[g] == b and (model.geom_contype[g] or model.geom_conaffinity[g])
+                g
+                for g in range(model.ngeom)
+                if model.geom_bodyid[g] == b
+                and (model.geom_contype[g] or model.geom_conaffinity[g])
             ]
             if not geoms:
                 raise ValueError(f"wheel body {name!r} has no collision geom")
             for g in geoms:
                 gname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom {g}"
                 _check_frictionless(model, g, gname)
-                if int(model.geom_type[g]) in (int(mujoco.mjtGeom.mjGEOM_SPHERE), int(mujoco.mjtGeom.mjGEOM_CYLINDER)):
+                if int(model.geom_type[g]) in (
+                    int(mujoco.mjtGeom.mjGEOM_SPHERE),
+                    int(mujoco.mjtGeom.mjGEOM_CYLINDER),
+                ):
                     r = float(model.geom_size[g, 0])
                     if abs(r - radius[k]) > radius_rtol * radius[k]:
                         raise ValueError(
@@ -281,7 +304,12 @@ def _check_frictionless(model, g, gname):
         touch = (model.geom_contype[g] & model.geom_conaffinity[h]) or (
             model.geom_contype[h] & model.geom_conaffinity[g]
         )
-        if touch and h != g and model.geom_bodyid[h] != model.geom_bodyid[g] and model.geom_condim[h] != 1:
+        if (
+            touch
+            and h != g
+            and model.geom_bodyid[h] != model.geom_bodyid[g]
+            and model.geom_condim[h] != 1
+        ):
             hname = mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, h) or f"geom {h}"
             raise ValueError(
                 f"geom {hname!r} can touch wheel geom {gname!r} but has condim="
@@ -368,7 +396,7 @@ def _wheel_kinematics(m, d, wheels):
     return speed, lateral, spin, heading, axle
 
 
-def _snow_forces(m, d, wheels, snow, entry_angle, load, loads_prev, shear, speed_eps):
+def _snow_forces(m, d, wheels, snow, entry_angle, load, loads_prev, shear, speed_eps, distribution):
     speed, lateral, spin, heading, axle = _wheel_kinematics(m, d, wheels)
     dtype = speed.dtype
     if isinstance(load, str):  # "contact"
@@ -382,16 +410,28 @@ def _snow_forces(m, d, wheels, snow, entry_angle, load, loads_prev, shear, speed
 
     def forces(v, omega):
         f = wheel_forces(
-            v, omega, solve_load, wheels.wheel, snow, shear,
-            speed_eps=speed_eps, initial_entry_angle=entry_angle,
+            v,
+            omega,
+            solve_load,
+            wheels.wheel,
+            snow,
+            shear,
+            speed_eps=speed_eps,
+            initial_entry_angle=entry_angle,
+            distribution=distribution,
         )
         return (f.longitudinal_force, f.resisting_torque), f
 
     # Each wheel's (F, M_w) depends on its own (v, omega) only: two forward-mode
-    # tangents give the 2 x 2 Jacobian of every wheel at once.
-    ones, zeros = jnp.ones_like(spin), jnp.zeros_like(spin)
-    _, (dF_dv, dM_dv), f = jax.jvp(forces, (speed, spin), (ones, zeros), has_aux=True)
-    _, (dF_dw, dM_dw), _ = jax.jvp(forces, (speed, spin), (zeros, ones), has_aux=True)
+    # tangents give the 2 x 2 Jacobian of every wheel at once.  Vmapping the jvp over
+    # the two tangents traces (and runs) the equilibrium solve once, not twice.
+    def tangent(direction):
+        tv = jnp.full_like(speed, direction[0])
+        tw = jnp.full_like(spin, direction[1])
+        return jax.jvp(forces, (speed, spin), (tv, tw), has_aux=True)
+
+    basis = jnp.eye(2, dtype=speed.dtype)
+    _, ((dF_dv, dF_dw), (dM_dv, dM_dw)), f = jax.vmap(tangent, out_axes=(None, 0, None))(basis)
     force = airborne * f.longitudinal_force
     torque = airborne * f.resisting_torque
     # Damping of the generalised snow force Q = J_v^T F - J_w^T M_w w.r.t. (v, omega):
@@ -433,16 +473,14 @@ def _snow_damping_matrix(m, d, wheels, damp, heading, axle):
     return jnp.einsum("kiv,kij,kjw->vw", g, damp, g)
 
 
-def _check_step_args(m, d, wheels, snow, shear, speed_eps):
+def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
     if not isinstance(m, mjx.Model):
         raise TypeError(f"m must be an mjx.Model (mjx.put_model), got {type(m).__name__}")
     if not isinstance(d, mjx.Data):
         raise TypeError(f"d must be an mjx.Data (mjx.make_data), got {type(d).__name__}")
     if not isinstance(wheels, MjxWheels):
         raise TypeError(f"wheels must be a snowjax.mjx.MjxWheels, got {type(wheels).__name__}")
-    if not isinstance(snow, WongSnow):
-        raise TypeError(f"snow must be a snowjax.WongSnow, got {type(snow).__name__}")
-    _check_shear(shear)
+    _check_model(wheels.wheel, snow, distribution, shear)
     if not (np.isfinite(speed_eps) and speed_eps > 0):
         raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
     if m.opt.integrator != mjx.IntegratorType.EULER:
@@ -460,12 +498,13 @@ def step(
     m: mjx.Model,
     d: mjx.Data,
     wheels: MjxWheels,
-    snow: WongSnow,
+    snow: Terrain,
     entry_angle: Float[ArrayLike, " n"] | None = None,
     *,
     load: Float[ArrayLike, " n"] | str | None = None,
     shear: ShearModel = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
+    distribution: WongReece | None = None,
 ) -> tuple[mjx.Data, MjxWheelForces]:
     """One MJX time step with the snow's forces on the wheels; pure and differentiable.
 
@@ -482,22 +521,25 @@ def step(
 
     - `m`, `d`: `mjx.Model` (Euler integrator) and `mjx.Data`.
     - `wheels`: `MjxWheels` of this model.
-    - `snow`: `WongSnow` (SI).  Vmapping over its leaves runs one rollout per snow.
+    - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+      `LayeredSnow`; SI).  Vmapping over its leaves runs one rollout per terrain.
     - `entry_angle`: warm start theta0 [rad] per wheel, the `entry_angle` output of the
       previous step (None: cold start); changes only the iteration count.
     - `load`: vertical load per wheel [N]: None (default) `wheels.static_load`, the
       quasi-static load at rest; an array (shape () or (n,)) to prescribe it; or
       `"contact"`: the floor's normal force on the wheel in the previous step (module
       documentation; includes load transfer, but see its caveat).
-    - `shear`, `speed_eps`: as in `snowjax.wheel_forces` ([m/s]).
+    - `shear`, `speed_eps`, `distribution`: as in `snowjax.wheel_forces` (shear model;
+      regularisation speed [m/s]; `None` or a `WongReece` stress distribution).
 
     **Returns:** `(next mjx.Data, MjxWheelForces)`; its `xfrc_applied` holds the snow
     wrenches that were applied.
 
     **Errors:** `TypeError` for arguments of the wrong type, `ValueError` for a model
-    that is not Euler-integrated, a bad `speed_eps` or `shear`.
+    that is not Euler-integrated, a bad `speed_eps` or `shear`, or a shear model the
+    terrain does not support.
     """
-    _check_step_args(m, d, wheels, snow, shear, speed_eps)
+    _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
     # The floor's normal forces of the last solve, before fwd_position rebuilds them.
@@ -511,7 +553,16 @@ def step(
     d = mjx.fwd_velocity(m, d)
     d = mjx.sensor_vel(m, d)
     wrench, damp, heading, axle, out = _snow_forces(
-        m, d, wheels, snow, entry_angle, load, loads_prev, shear, float(speed_eps)
+        m,
+        d,
+        wheels,
+        snow,
+        entry_angle,
+        load,
+        loads_prev,
+        shear,
+        float(speed_eps),
+        distribution,
     )
     b = np.asarray(wheels.body_ids)
     d = d.replace(xfrc_applied=d.xfrc_applied.at[b].set(wrench.astype(d.xfrc_applied.dtype)))
@@ -528,7 +579,9 @@ def step(
     mass = mjx.full_m(m, d) + dt * jnp.diag(m.dof_damping)
     mass = mass + dt * _snow_damping_matrix(m, d, wheels, damp, heading, axle)
     qacc = jnp.linalg.solve(mass, d.qfrc_smooth + d.qfrc_constraint)
-    explicit = m.replace(opt=m.opt.replace(disableflags=m.opt.disableflags | mjx.DisableBit.EULERDAMP))
+    explicit = m.replace(
+        opt=m.opt.replace(disableflags=m.opt.disableflags | mjx.DisableBit.EULERDAMP)
+    )
     d = mjx.euler(explicit, d.replace(qacc=qacc))
     return d, out
 
@@ -557,7 +610,7 @@ def rollout(
     m: mjx.Model,
     d: mjx.Data,
     wheels: MjxWheels,
-    snow: WongSnow,
+    snow: Terrain,
     ctrl: Float[ArrayLike, "... nu"],
     num_steps: int,
     *,
@@ -565,6 +618,7 @@ def rollout(
     load: Float[ArrayLike, " n"] | str | None = None,
     shear: ShearModel = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
+    distribution: WongReece | None = None,
 ) -> Rollout:
     """`num_steps` calls of `step` in one `jax.lax.scan`, the entry angles carried along.
 
@@ -576,7 +630,7 @@ def rollout(
 
     **Returns:** `Rollout`.
     """
-    _check_step_args(m, d, wheels, snow, shear, speed_eps)
+    _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     num_steps = int(num_steps)
     if num_steps < 1:
         raise ValueError(f"num_steps must be >= 1; got {num_steps!r}")
@@ -595,8 +649,15 @@ def rollout(
     def body(carry, u):
         data, theta = carry
         data, out = step(
-            m, data.replace(ctrl=u), wheels, snow, theta,
-            load=load, shear=shear, speed_eps=speed_eps,
+            m,
+            data.replace(ctrl=u),
+            wheels,
+            snow,
+            theta,
+            load=load,
+            shear=shear,
+            speed_eps=speed_eps,
+            distribution=distribution,
         )
         theta = jax.lax.stop_gradient(
             jnp.where(jnp.isfinite(out.entry_angle), out.entry_angle, theta)

@@ -26,6 +26,7 @@ MODELS = {"_leaves", "_constants", "_terrain", "_wheel", "_tire", "_empirical"}
 for name in WORKFLOWS:
     ALLOWED[name] = MODELS | WORKFLOWS
 ALLOWED["_cli"] = MODELS | WORKFLOWS
+ALLOWED["mjx"] = MODELS | WORKFLOWS  # snowjax.mjx: the optional MuJoCo MJX bridge
 
 
 def _modules():

@@ -88,7 +88,10 @@ def _kinematics(speed, wheel_speed, radius, speed_eps):
     rim = wheel_speed * radius
     direction = jnp.where(speed + rim >= 0, 1.0, -1.0).astype(rim.dtype)
     v, u = direction * speed, direction * rim  # the mirror image travelling forwards
-    floor = float(np.sqrt(np.finfo(rim.dtype).tiny))  # only to avoid 0 / 0 at rest
+    # Only to avoid 0 / 0 at rest: below speed_eps * eps the force factor is 0 to rounding.
+    # (A floor of sqrt(tiny) made d slip / dv ~ 1e154 at rest, and second derivatives,
+    # e.g. forward mode over the slopes snowjax.mjx uses, overflowed to inf.)
+    floor = speed_eps * float(np.finfo(rim.dtype).eps)
     slip = (u - v) / jnp.maximum(jnp.maximum(jnp.abs(u), 0.5 * jnp.abs(v)), floor)
     slip = jnp.clip(slip, -1.0, 1.0)
     gap = 1 - jnp.minimum(jnp.abs(speed + rim) / (2 * speed_eps), 1.0)
@@ -231,20 +234,17 @@ def wheel_forces(
     **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage
     [m], entry angle [rad], slip [-], status).
 
-    **Use in MJX / Brax.**  For each wheel body: v = the axle's velocity along the
-    wheel's heading (from `mjx.Data.cvel` or the free joint's `qvel`), omega = the wheel
-    hinge's `qvel`, load = the static share of the weight or the suspension force; call
-    `wheel_forces` once on all wheels (arrays broadcast) and write
-    `longitudinal_force * heading` (force, world frame) and
-    `-resisting_torque * axle` (torque about the spin axis) into rows of
-    `data.xfrc_applied` (MJX; the Brax MJX pipeline steps the same `mjx.Data`) before
-    `mjx.step`; disable MuJoCo's own wheel–ground contact for those geoms and carry the
-    vertical load by a spring–damper or a height constraint at `sinkage`.  Keep
-    `entry_angle` in the environment state and pass it back as `initial_entry_angle`.
-    The contact forces are quasi-static: the simulator's step should resolve the wheel
-    spin dynamics (the wheel equation is stiff near the self-propelled slip; explicit
-    steps need dt well below `I omega^2 r / (v dM_w/di)`, or use an implicit step as
-    `simulate_longitudinal` does).
+    **Use in MJX / Brax.**  `snowjax.mjx` (extra `snowjax[mjx]`) does this for MuJoCo
+    MJX: `snowjax.mjx.step` computes v (the axle's velocity along the wheel's heading),
+    omega (the spin about the axle) and the load for every wheel body, calls this
+    function, and writes `longitudinal_force * heading` and `-resisting_torque * axle`
+    into the wheel rows of `data.xfrc_applied`, with a linearly implicit spin update.  In
+    another simulator, do the same and keep `entry_angle` in the environment state to
+    pass back as `initial_entry_angle`.  The contact forces are quasi-static: the
+    simulator's step should resolve the wheel spin dynamics (the wheel equation is stiff
+    near the self-propelled slip; explicit steps need dt well below
+    `I omega^2 r / (v dM_w/di)`, or use an implicit step as `simulate_longitudinal` and
+    `snowjax.mjx.step` do).
 
     **Errors.**  With concrete inputs, non-finite `speed`/`wheel_speed`, `load <= 0` or
     `speed_eps <= 0` raise `ValueError`; under `jit` invalid elements give
