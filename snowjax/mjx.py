@@ -24,14 +24,15 @@ sphere or cylinder of the wheel's radius) rests on a rigid floor that stands for
 *compacted bottom of the rut*; the undisturbed snow surface lies z0 above it.  The floor
 contact must be frictionless (`condim="1"` on the wheel geoms and on everything they touch;
 checked): MuJoCo's contact supplies only the normal force, which *is* the wheel load W,
-and the snow supplies the tangential force and the resisting torque.  The load is read
-from MJX's own solution: the normal force of the wheel's contacts in the previous step
-(`efc_force`, one step of lag), so it includes the static weight distribution and the load
-transfer produced by acceleration, pitch and the drive torques' reaction, as a real
-vehicle sees it; a wheel that leaves the floor gets no snow force (the forces are scaled
-by `min(load / min_load, 1)` below `MjxWheels.min_load`, so lift-off is continuous).  Pass
-`load=` to `step` to prescribe the loads instead (for example the static share `m g / n` of
-`snowjax.simulate_longitudinal`).  Why not a vertical spring on the sinkage: W(z0) of the
+and the snow supplies the tangential force and the resisting torque.  The load the snow
+model sees is one of three (`load=` of `step`): by default each wheel's static load,
+measured by `MjxWheels.from_model` at rest (the static share `m g / n` of
+`snowjax.simulate_longitudinal` for a symmetric vehicle); an array to prescribe it; or
+`"contact"`: MJX's own solution, the normal force of the wheel's floor contacts in the
+previous step (`efc_force`, one step of lag), which includes the load transfer produced
+by acceleration, pitch and the drive torques' reaction, as a real vehicle sees it.  With
+`"contact"` a wheel that leaves the floor gets no snow force (the forces are scaled by
+`min(load / min_load, 1)` below `MjxWheels.min_load`, so lift-off is continuous).  Why not a vertical spring on the sinkage: W(z0) of the
 snow is a plastic compaction curve (it does not give the load back on unloading) and is
 stiff near the layer's base, so a spring built from it would be neither the thesis's
 physics nor stable in an explicit step, and the thesis's contact is quasi-static anyway:
