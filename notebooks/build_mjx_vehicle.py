@@ -114,7 +114,7 @@ for row, label in ((0, "fresh snow (thesis)"), (1, "firm snow")):
     axes[0].plot(time_s, speed[row], label=f"{label}: {float(distance[row]):.2f} m")
     axes[1].plot(time_s, slip[row], label=label)
 axes[0].set(xlabel="time [s]", ylabel="speed [m/s]", title="Speed from rest, 540 N m per wheel")
-axes[1].set(xlabel="time [s]", ylabel="slip [-]", title="Wheel slip", ylim=(0, 1))
+axes[1].set(xlabel="time [s]", ylabel="slip [-]", title="Wheel slip", ylim=(-0.1, 1))
 axes[0].legend()
 axes[1].legend()
 fig.tight_layout()
