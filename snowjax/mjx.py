@@ -30,16 +30,17 @@ measured by `MjxWheels.from_model` at rest (the static share `m g / n` of
 `snowjax.simulate_longitudinal` for a symmetric vehicle); an array to prescribe it; or
 `"contact"`: MJX's own solution, the normal force of the wheel's floor contacts in the
 previous step (`efc_force`, one step of lag), which includes the load transfer produced
-by acceleration, pitch and the drive torques' reaction, as a real vehicle sees it.  With
-`"contact"` a wheel that leaves the floor gets no snow force (the forces are scaled by
-`min(load / min_load, 1)` below `MjxWheels.min_load`, so lift-off is continuous).  Why not a vertical spring on the sinkage: W(z0) of the
-snow is a plastic compaction curve (it does not give the load back on unloading) and is
-stiff near the layer's base, so a spring built from it would be neither the thesis's
-physics nor stable in an explicit step, and the thesis's contact is quasi-static anyway:
-the rut depth follows the load and slip instantly, exactly as in
-`simulate_longitudinal`.  What is neglected: the vertical motion of the vehicle as the rut
-deepens or shallows with slip (`sinkage` is reported, not applied to the geometry), and the
-few millimetres of MuJoCo's soft-contact penetration are not sinkage.
+by acceleration, pitch and the drive torques' reaction, as a real vehicle sees it.  The
+forces are scaled by `min(load / min_load, 1)` (`MjxWheels.min_load`), so with
+`"contact"` a wheel that leaves the floor gets no snow force and lift-off is continuous.
+Why not a vertical spring on the sinkage: W(z0) of the snow is a plastic compaction
+curve (it does not give the load back on unloading) and is stiff near the layer's base,
+so a spring built from it would be neither the thesis's physics nor stable in an explicit
+step, and the thesis's contact is quasi-static anyway: the rut depth follows the load and
+slip instantly, exactly as in `simulate_longitudinal`.  What is neglected: the vertical
+motion of the vehicle as the rut deepens or shallows with slip (`sinkage` is reported, not
+applied to the geometry), and the few millimetres of MuJoCo's soft-contact penetration
+are not sinkage.
 
 **Stiff wheel spin.**  Near the self-propelled slip the wheel-spin equation is stiff
 (time constant `I v / (r (1 - i)^2 dM_w/di)`, well below MJX's step at low speed), so an
@@ -397,13 +398,9 @@ def _wheel_kinematics(m, d, wheels):
     return speed, lateral, spin, heading, axle
 
 
-def _snow_forces(m, d, wheels, snow, entry_angle, load, loads_prev, shear, speed_eps, distribution):
+def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distribution):
     speed, lateral, spin, heading, axle = _wheel_kinematics(m, d, wheels)
     dtype = speed.dtype
-    if isinstance(load, str):  # "contact"
-        load = loads_prev
-    elif load is None:
-        load = wheels.static_load.astype(dtype)
     load = jnp.broadcast_to(jnp.asarray(load, dtype), speed.shape)
     min_load = wheels.min_load.astype(dtype)
     airborne = jnp.clip(load / min_load, 0.0, 1.0)  # lift-off: forces fade to 0
@@ -543,8 +540,11 @@ def step(
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
-    # The floor's normal forces of the last solve, before fwd_position rebuilds them.
-    loads_prev = _contact_loads(d, wheels) if isinstance(load, str) else None
+    if isinstance(load, str):
+        # The floor's normal forces of the last solve, before fwd_position rebuilds them.
+        load = _contact_loads(d, wheels)
+    elif load is None:
+        load = wheels.static_load
     n = wheels.num_wheels
     if entry_angle is not None:
         entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
@@ -560,7 +560,6 @@ def step(
         snow,
         entry_angle,
         load,
-        loads_prev,
         shear,
         float(speed_eps),
         distribution,
