@@ -14,6 +14,7 @@ from ._wheel.geometry import RigidWheel as RigidWheel
 from ._terrain.base import Terrain as Terrain
 from ._terrain.wong import WongSnow as WongSnow
 from ._wheel.distribution import WongReece as WongReece
+from ._wheel.lateral import Lateral as Lateral
 from ._terrain.bekker import bekker_pressure as bekker_pressure
 from ._terrain.shear import gawwad_crolla_shear as gawwad_crolla_shear
 from ._terrain.shear import gawwad_crolla_unloading_pressure as gawwad_crolla_unloading_pressure

@@ -33,7 +33,7 @@ are placed by the linear width of the shear layer (`_classic_layout`).
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, cast
 
 import equinox as eqx
 import jax
@@ -692,7 +692,7 @@ def _general_contact_forces_jit(wheel, terrain, distribution, entry_angle, slip,
         )
         return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, fractions)
 
-    w, r, t, m = _with_rule_for(slip, shear, forces, layout)
+    w, r, t, m = cast(tuple, _with_rule_for(slip, shear, forces, layout))
     reshape = lambda x: x.reshape(shape)  # noqa: E731
     return ContactForces(
         vertical_load=reshape(w),

@@ -28,6 +28,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
+from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._terrain.layered import LayeredSnow
 from .bracketed import solve_elementwise
@@ -48,18 +49,24 @@ from .inputs import (
     _broadcast_shape,
     _check_model,
     _check_options,
+    _check_rules,
+    _fits,
     _is_thesis_path,
     _magnitude_window,
     _numeric_argument,
     _valid_mask,
     _validate_eagerly,
 )
+from .lateral import Lateral
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
 # The rim geometry (4.5)-(4.8) and the simplified model's tau2 = 1/cos(theta0) - 1 need
 # theta0 below 90 degrees; the solver stops at 85 degrees (z0 = 0.46 D).
 MAX_ENTRY_ANGLE = float(np.deg2rad(85.0))
+# Slip angles are accepted up to (not including) 90 degrees, where the side-slip of a
+# wheel that keeps its driving slip i < 1 would need an infinite travel speed.
+MAX_SLIP_ANGLE = float(np.pi / 2)
 
 
 class Status(enum.IntEnum):
@@ -94,6 +101,11 @@ class WheelState(eqx.Module):
     - `thrust`: horizontal component of the shear stress, eq. (2.9) times r b [N].
     - `drawbar_pull`: thrust - motion resistance, eq. (2.10) [N].
     - `torque`: M_w, eq. (2.12) [N m] (the wheel torque the snow resists).
+    - `lateral_force`: F_y [N], along the axle, positive when the slip angle is positive
+      (it resists the side-slip; see `solve_wheel`'s `slip_angle`); 0 without a slip angle.
+    - `aligning_torque`: M_z [N m], moment of the lateral stresses (and the bulldozing
+      resistance) about the vertical through the wheel centre, positive counter-clockwise
+      seen from above (x forward, y left, z up); 0 without a slip angle.
     - `status`: `Status` code (int32).
     """
 
@@ -103,6 +115,8 @@ class WheelState(eqx.Module):
     thrust: Float[Array, "..."]
     drawbar_pull: Float[Array, "..."]
     torque: Float[Array, "..."]
+    lateral_force: Float[Array, "..."]
+    aligning_torque: Float[Array, "..."]
     status: Int[Array, "..."]
 
 
@@ -358,6 +372,8 @@ def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, l
         thrust=out(t),
         drawbar_pull=out(t - r),
         torque=out(m),
+        lateral_force=out(jnp.zeros_like(m)),
+        aligning_torque=out(jnp.zeros_like(m)),
         status=jnp.where(valid, status, Status.INVALID_INPUT).astype(jnp.int32).reshape(shape),
     )
 
@@ -383,7 +399,7 @@ def _scan_grid(terrain, dtype):
 
 
 def _solve_general_layout(
-    wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking
+    wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking, side, bulldozing
 ):
     """Equilibrium on any terrain / distribution for a flat batch, one quadrature layout.
 
@@ -393,25 +409,32 @@ def _solve_general_layout(
     and interpolating ln W linearly in s^2 inside it (exact for a power law) starts
     Newton, which is kept inside the bracket and bisects where a Newton step would leave
     it (`BracketedNewton`).
+
+    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`); the
+    lateral force and aligning torque are returned as zeros without it.
     """
     dtype = load.dtype
     tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
-    cos_base = 1 - 2 * terrain.depth / diameter  # -inf for an infinitely deep terrain
+    # -inf for an infinitely deep terrain; written with `where` so that reverse-mode
+    # gradients w.r.t. the diameter are not 0 * inf = NaN there.
+    finite = jnp.isfinite(terrain.depth)
+    depth = jnp.where(finite, terrain.depth, 0.0)
+    cos_base = jnp.where(finite, 1 - 2 * depth / diameter, -jnp.inf)
     inside = cos_base > -1
     theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
     theta_cap = jnp.minimum(theta_base, MAX_ENTRY_ANGLE)
     reaches_base = theta_base <= MAX_ENTRY_ANGLE
     fractions = None if distribution is None else distribution.angle_fractions(slip)
 
-    def contact_batch(theta0, vertical_only, i, d, b, tr, fr):  # explicit parameters
-        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
-            th, i, d, b, tr, fr, shear, n, braking, vertical_only
+    def contact_batch(theta0, vertical_only, i, d, b, tr, fr, sd):  # explicit parameters
+        fn = lambda th, i, d, b, tr, fr, sd: general_contact(  # noqa: E731
+            th, i, d, b, tr, fr, shear, n, braking, vertical_only, sd, bulldozing
         )
-        return jax.vmap(fn)(theta0, i, d, b, tr, fr)
+        return jax.vmap(fn)(theta0, i, d, b, tr, fr, sd)
 
     def contact(theta0, vertical_only):
-        return contact_batch(theta0, vertical_only, slip, diameter, width, terrain, fractions)
+        return contact_batch(theta0, vertical_only, slip, diameter, width, terrain, fractions, side)
 
     def vertical(theta0) -> Array:  # W alone
         return cast(Array, contact(theta0, True))
@@ -456,46 +479,84 @@ def _solve_general_layout(
         jnp.clip(s0, lower, upper),
         lower,
         upper,
-        (theta_cap, target, slip, diameter, width, terrain, fractions),
+        (theta_cap, target, slip, diameter, width, terrain, fractions, side),
         tol,
         max_steps,
     )
     theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
-    w, r, t, m = contact(theta0, False)
+    forces = cast(tuple, contact(theta0, False))
+    w, r, t, m = forces[:4]
+    fy, mz = forces[4:] if side is not None else (jnp.zeros_like(m), jnp.zeros_like(m))
     balanced = jnp.abs(w / target - 1) <= 10 * tol
     status = jnp.where(
         over,
         jnp.where(reaches_base, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT),
         jnp.where(balanced, Status.CONVERGED, Status.NOT_CONVERGED),
     )
-    return theta0, r, t, m, status.astype(jnp.int32)
+    return theta0, r, t, m, fy, mz, status.astype(jnp.int32)
+
+
+def _side_rules(slip_angle, lateral):
+    """Validity rules of the slip angle and the `Lateral` leaves (empty without them)."""
+    if slip_angle is None:
+        return []
+    ok = jnp.abs(slip_angle) < MAX_SLIP_ANGLE
+    rules = [("slip_angle", slip_angle, ok, "in (-pi/2, pi/2) rad")]
+    return rules + Lateral.constraints(lateral)
 
 
 @eqx.filter_jit
 def _solve_general_jit(
-    wheel, terrain, distribution, load, slip, shear, n, max_steps, guess, layout
+    wheel,
+    terrain,
+    distribution,
+    load,
+    slip,
+    shear,
+    n,
+    max_steps,
+    guess,
+    layout,
+    slip_angle=None,
+    lateral=None,
 ):
-    shape, dtype, (wheel, terrain, distribution, load, slip, guess) = _broadcast_leaves(
-        wheel, terrain, distribution, load, slip, guess
+    shape, dtype, (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral) = (
+        _broadcast_leaves(wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
     )
     valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
+    small, large = _magnitude_window(dtype)
+    for name, value, ok, _ in _side_rules(slip_angle, lateral):
+        valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
     wheel, terrain, load, slip, distribution = _safe_inputs(
         valid, wheel, terrain, load, slip, distribution
     )
+    if slip_angle is None:
+        side = None
+        bulldozing = False
+    else:
+        pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
+        reference = Lateral(
+            shear_modulus=None if lateral.shear_modulus is None else 0.02,
+            unit_weight=0.0,
+            bulldozing=lateral.bulldozing,
+        )
+        lateral = jax.tree_util.tree_map(pick, lateral, reference)
+        side = (jnp.tan(pick(slip_angle, 0.0)), lateral.shear_modulus, lateral.unit_weight)
+        bulldozing = lateral.bulldozing
 
     def solve(ops):
-        wh, tr, ds, ld, sl, gs = ops
+        wh, tr, ds, ld, sl, gs, sd = ops
         return _with_rule_for(
             sl,
             shear,
             lambda braking: _solve_general_layout(
-                wh, tr, ds, ld, sl, gs, shear, n[braking], max_steps, braking
+                wh, tr, ds, ld, sl, gs, shear, n[braking], max_steps, braking, sd, bulldozing
             ),
             layout,
         )
 
-    theta0, r, t, m, status = _in_chunks(
-        solve, (wheel, terrain, distribution, load, slip, guess), load.shape[0]
+    theta0, r, t, m, fy, mz, status = _in_chunks(
+        solve, (wheel, terrain, distribution, load, slip, guess, side), load.shape[0]
     )
     nan = jnp.asarray(jnp.nan, dtype)
     out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
@@ -506,6 +567,8 @@ def _solve_general_jit(
         thrust=out(t),
         drawbar_pull=out(t - r),
         torque=out(m),
+        lateral_force=out(fy),
+        aligning_torque=out(mz),
         status=jnp.where(valid, status, Status.INVALID_INPUT).astype(jnp.int32).reshape(shape),
     )
 
@@ -518,6 +581,8 @@ def solve_wheel(
     shear: ShearModel = "classic",
     *,
     distribution: WongReece | None = None,
+    slip_angle: Float[ArrayLike, "..."] | None = None,
+    lateral: Lateral | None = None,
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
@@ -553,6 +618,23 @@ def solve_wheel(
     - `shear`: `"classic"` (Janosi–Hanamoto, 4.11), `"simplified"` (the thesis's model,
       4.13; `WongSnow` without a distribution only) or `"none"` (normal stress only).
     - `distribution`: None (front region, the thesis) or `WongReece(c1, c2, c3)`.
+    - `slip_angle`: beta [rad], |beta| < pi/2, broadcasts like `slip`: the angle between
+      the wheel's heading and its direction of travel, positive when the wheel moves
+      towards -y of its own frame (velocity (V cos beta, -V sin beta); x along the heading,
+      y along the axle, z up).  The slip is then the driving slip of the heading's
+      component, `i = 1 - V cos(beta) / (omega r)`.  The shear stress becomes the
+      combined law of `snowjax.Lateral` (the resultant of the rim and axle shear
+      displacements mobilises Janosi–Hanamoto, capped by Mohr–Coulomb; see its
+      docstring for the formulation and sources), which also changes the sinkage and
+      the longitudinal forces, and `lateral_force` / `aligning_torque` are filled in.
+      `None` (default) is straight running: exactly the results of before, with
+      `lateral_force = aligning_torque = 0`; so is a concrete all-zero `slip_angle`.  A
+      traced or non-zero `slip_angle` takes the any-terrain quadrature (also for
+      `WongSnow` without a distribution), which at beta = 0 agrees with the straight
+      results within its accuracy (1e-7); `shear="simplified"` is refused with it.
+    - `lateral`: `Lateral(shear_modulus=K_y [m] or None, unit_weight [N/m^3],
+      bulldozing=False)`; default `Lateral()`: K_y = the terrain's modulus, no sidewall
+      bulldozing.  Used only with a `slip_angle`.
     - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  `WongSnow` without
       a distribution: two panels when all slips are >= 0, four with braking; defaults
       classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified 24 + 24 and
@@ -599,12 +681,62 @@ def solve_wheel(
     slip = _numeric_argument("slip", slip)
     if initial_entry_angle is not None:
         initial_entry_angle = _numeric_argument("initial_entry_angle", initial_entry_angle)
-    shape = _broadcast_shape(wheel, terrain, distribution, load, slip, initial_entry_angle)
+    if lateral is not None and not isinstance(lateral, Lateral):
+        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    if slip_angle is not None:
+        slip_angle = _numeric_argument("slip_angle", slip_angle)
+        if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
+            # Straight running: the solver paths of before, at the broadcast shape.
+            shape = _broadcast_shape(
+                wheel, terrain, distribution, load, slip, initial_entry_angle, slip_angle
+            )
+            broadcast = np.broadcast_to if not _is_traced(load) else jnp.broadcast_to
+            load = broadcast(load, shape)
+            slip_angle = None
+    if slip_angle is not None:
+        lateral = Lateral() if lateral is None else lateral
+        if shear == "simplified":
+            raise ValueError(
+                "shear='simplified' (eq. 4.13) has no lateral counterpart: use "
+                "shear='classic' (or 'none') with a slip_angle."
+            )
+    side_trees = (slip_angle, lateral) if slip_angle is not None else (None, None)
+    shape = _broadcast_shape(
+        wheel, terrain, distribution, load, slip, initial_entry_angle, *side_trees
+    )
     if math.prod(shape) == 0:  # an empty batch: empty results, nothing to solve
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         empty = jnp.zeros(shape, dtype)
-        return WheelState(empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32))
+        return WheelState(
+            empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
+        )
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
+    if slip_angle is not None:
+        small, large = _magnitude_window(
+            jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
+        )
+        concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
+        _check_rules(
+            _side_rules(*jax.tree_util.tree_map(concrete, side_trees)),
+            jnp.result_type(load, float),
+            small,
+            large,
+        )
+        n = _general_nodes_for(shear, nodes_per_panel)
+        return _solve_general_jit(
+            wheel,
+            terrain,
+            distribution,
+            load,
+            slip,
+            shear,
+            n,
+            int(max_steps),
+            initial_entry_angle,
+            _layout(slip),
+            slip_angle,
+            lateral,
+        )
     if _is_thesis_path(terrain, distribution):
         n = _nodes_for(shear, nodes_per_panel)
         return _solve_wheel_jit(

@@ -34,6 +34,7 @@ from jaxtyping import Array
 
 from .._terrain.layered import LayeredSnow
 from .._terrain.shear import _signed_mobilisation
+from .lateral import bulldozing_pressure, combined_mobilisation
 
 # Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
 # README for the measured accuracy.
@@ -143,12 +144,20 @@ def general_contact(
     n,
     braking=True,
     vertical_only=False,
+    side=None,
+    bulldozing=False,
 ):
     """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
 
     `fractions` is None (front region only, 0..theta0) or (theta_m / theta0,
     theta_r / theta0) of the Wong–Reece distribution.  `braking=False` is valid only
     for slip >= 0 (no sign change of the shear displacement).
+
+    `side` is None (straight running) or `(tan(beta), K_y, gamma)` of a wheel under slip
+    angle beta (`lateral.py`; K_y None: the terrain's modulus); then the shear stress is
+    the combined law and (W, R, T, M, F_y, M_z) are returned, F_y the lateral force [N]
+    and M_z the moment about the vertical through the wheel centre [N m], with the
+    sidewall bulldozing resistance if `bulldozing`.
     """
     dtype = theta0.dtype
     r = diameter / 2
@@ -160,9 +169,16 @@ def general_contact(
         theta_m = fractions[0] * theta0
         theta_r = fractions[1] * theta0
 
-    _, _, _, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
+    _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
     entry_slope = jnp.abs(1 - (1 - slip) * jnp.cos(theta0))
-    entry_scale = k_surface / (r * jnp.maximum(entry_slope, 1e-12))
+    if side is None:
+        entry_scale = k_surface / (r * jnp.maximum(entry_slope, 1e-12))
+    else:
+        # Width of the layer where the resultant displacement u rises to ~1.
+        tan_beta, k_lateral, unit_weight = side
+        k_y = k_surface if k_lateral is None else k_lateral
+        rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
+        entry_scale = 1 / (r * jnp.maximum(rate, 1e-12 / k_surface))
     if shear == "none":
         entry_scale = inf
 
@@ -205,11 +221,21 @@ def general_contact(
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
     sin = jnp.sin(theta)
     cos = jnp.cos(theta)
+    tau_y = None
     if shear == "none":
         tau = jnp.zeros_like(sigma)
+        if side is not None:
+            tau_y = jnp.zeros_like(sigma)
     else:
         j = r * ((theta0 - theta) - (1 - slip) * (jnp.sin(theta0) - sin))
-        tau = (cohesion + sigma * tan_phi) * _signed_mobilisation(j / modulus)
+        strength = cohesion + sigma * tan_phi
+        if side is None:
+            tau = strength * _signed_mobilisation(j / modulus)
+        else:
+            j_y = r * (1 - slip) * (theta0 - theta) * tan_beta
+            k_y = modulus if k_lateral is None else k_lateral
+            share_x, share_y = combined_mobilisation(j / modulus, j_y / k_y)
+            tau, tau_y = strength * share_x, strength * share_y
 
     rb = r * width
     w_int = jnp.sum((sigma * cos + tau * sin) * weight) * rb
@@ -218,4 +244,18 @@ def general_contact(
     r_int = jnp.sum(sigma * sin * weight) * rb
     t_int = jnp.sum(tau * cos * weight) * rb
     m_int = jnp.sum(tau * weight) * rb * r
-    return w_int, r_int, t_int, m_int
+    if side is None:
+        return w_int, r_int, t_int, m_int
+    assert tau_y is not None
+    fy_int = jnp.sum(tau_y * weight) * rb
+    mz_int = jnp.sum(tau_y * sin * weight) * rb * r
+    if bulldozing:
+        # Side face below the surface: depth h(theta) = r (cos theta - cos theta0) over the
+        # contact, length element r cos(theta) d theta, scaled by sin(beta).
+        depth = _rim_sinkage_between(theta, theta0, diameter)
+        q = bulldozing_pressure(depth, c_surface, tan_phi_surface, unit_weight)
+        sin_beta = tan_beta / jnp.sqrt(1 + tan_beta**2)
+        f_b = q * r * cos * weight * sin_beta
+        fy_int = fy_int + jnp.sum(f_b)
+        mz_int = mz_int + jnp.sum(f_b * r * sin)
+    return w_int, r_int, t_int, m_int, fy_int, mz_int

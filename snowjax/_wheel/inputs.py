@@ -113,9 +113,13 @@ def _numeric_argument(name: str, value):
     return value if _is_traced(value) or isinstance(value, jax.Array) else arr
 
 
-def _broadcast_shape(wheel, terrain, distribution, load, slip, guess) -> tuple[int, ...]:
+def _broadcast_shape(
+    wheel, terrain, distribution, load, slip, guess, slip_angle=None, lateral=None
+) -> tuple[int, ...]:
     """The broadcast shape of every input, or ValueError naming the shapes that clash."""
-    leaves = jax.tree_util.tree_leaves((wheel, terrain, distribution, load, slip, guess))
+    leaves = jax.tree_util.tree_leaves(
+        (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
+    )
     try:
         return tuple(np.broadcast_shapes(*(np.shape(x) for x in leaves)))
     except ValueError:
@@ -123,7 +127,10 @@ def _broadcast_shape(wheel, terrain, distribution, load, slip, guess) -> tuple[i
     named = {"load": load, "slip": slip}
     if guess is not None:
         named["initial_entry_angle"] = guess
-    for label, tree in (("wheel", wheel), (terrain.label, terrain), ("distribution", distribution)):
+    if slip_angle is not None:
+        named["slip_angle"] = slip_angle
+    trees = (("wheel", wheel), (terrain.label, terrain), ("distribution", distribution))
+    for label, tree in trees + (("lateral", lateral),):
         if tree is not None:
             for path, leaf in _module_leaves(tree).items():
                 named[f"{label}.{path}"] = leaf
@@ -247,7 +254,7 @@ def _magnitude_window(dtype) -> tuple[float, float]:
 def _fits(value, name, small, large):
     """Whether |value| lies in the magnitude window (works on NumPy and JAX values)."""
     magnitude = abs(value)
-    if name == "slip":
+    if name in ("slip", "slip_angle"):
         return magnitude <= large
     return (magnitude == 0) | ((magnitude >= small) & (magnitude <= large))
 

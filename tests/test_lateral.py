@@ -1,0 +1,336 @@
+"""The wheel under a slip angle: lateral force, aligning torque, sidewall bulldozing.
+
+Checked against an independent SciPy reference written from the equations in
+`snowjax/_wheel/lateral.py`'s docstring (the combined Janosi–Hanamoto law on the resultant
+of the rim and axle shear displacements, the Wong 2008 sidewall bulldozing pressure), the
+symmetries the model has (odd in beta), the straight-running results (beta = 0) and
+central differences.
+"""
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+from scipy import integrate, optimize
+
+import snowjax as sj
+from snowjax import Lateral, Status
+
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+
+WHEEL = sj.RigidWheel(0.736, 0.235)
+SHIPPED_SNOWS = {
+    "fresh": sj.WongSnow.thesis_fresh_snow(),
+    "plate_rule": sj.WongSnow.thesis_plate_rule_snow(),
+    "snow_us": sj.BekkerSoil.snow_us(),
+}
+
+
+# --------------------------------------------------------------------------------------
+# Independent reference (SciPy quad + brentq)
+# --------------------------------------------------------------------------------------
+
+
+def _reference_contact(theta0, slip, beta, D, b, law, c, tan_phi, K, K_y, fm, fr, gamma, bull):
+    """(W, R, T, M, F_y, M_z) by adaptive quadrature over theta_r .. theta0."""
+    r = D / 2
+    tm, tr = fm * theta0, fr * theta0
+
+    def theta_eff(th):
+        if th >= tm or tm == tr:
+            return th
+        return theta0 - (th - tr) / (tm - tr) * (theta0 - tm)
+
+    def sig(th):
+        return law(r * (math.cos(theta_eff(th)) - math.cos(theta0)))
+
+    def taus(th):
+        jx = r * ((theta0 - th) - (1 - slip) * (math.sin(theta0) - math.sin(th)))
+        jy = r * (1 - slip) * (theta0 - th) * math.tan(beta)
+        a, bb = jx / K, jy / K_y
+        u = math.hypot(a, bb)
+        if u == 0:
+            return 0.0, 0.0
+        tau = (c + sig(th) * tan_phi) * -math.expm1(-u)
+        return tau * a / u, tau * bb / u
+
+    phi = math.atan(tan_phi)
+    cot_x = 1 / math.tan(math.pi / 4 - phi / 2)
+
+    def q_b(th):  # bulldozing force per unit angle, along +y
+        h = max(r * (math.cos(th) - math.cos(theta0)), 0.0)
+        q = 0.5 * gamma * h**2 * cot_x**2 * (1 + cot_x * tan_phi / 2) + 2 * c * h * cot_x
+        return q * r * math.cos(th) * math.sin(beta)
+
+    pts = {tr, tm, theta0}
+    for m in (1, 4, 16, 64, 256):
+        for p in (theta0 - m * min(K, K_y) / r, tr + (theta0 - tr) / 4**m):
+            if tr < p < theta0:
+                pts.add(p)
+    pts = sorted(p for p in pts if tr <= p <= theta0)
+    fns = [
+        lambda t: sig(t) * math.cos(t) + taus(t)[0] * math.sin(t),
+        lambda t: sig(t) * math.sin(t),
+        lambda t: taus(t)[0] * math.cos(t),
+        lambda t: taus(t)[0] * r,
+        lambda t: taus(t)[1],
+        lambda t: taus(t)[1] * r * math.sin(t),
+    ]
+    out = []
+    for fn in fns:
+        total = 0.0
+        for lo, hi in zip(pts[:-1], pts[1:]):
+            total += integrate.quad(fn, lo, hi, epsabs=0.0, epsrel=1e-12, limit=400)[0]
+        out.append(total * r * b)
+    if bull:
+        out[4] += integrate.quad(q_b, tr, theta0, epsrel=1e-12)[0]
+        out[5] += integrate.quad(lambda t: q_b(t) * r * math.sin(t), tr, theta0, epsrel=1e-12)[0]
+    return np.array(out)
+
+
+def _reference_solve(load, slip, beta, law, c, tan_phi, K, K_y, fm, fr, gamma, bull, th_max):
+    args = (slip, beta, 0.736, 0.235, law, c, tan_phi, K, K_y, fm, fr, gamma, bull)
+    theta0 = optimize.brentq(
+        lambda th: _reference_contact(th, *args)[0] - load, 1e-3, th_max, xtol=1e-15, rtol=1e-14
+    )
+    return theta0, _reference_contact(theta0, *args)
+
+
+CASES = [
+    # (terrain, distribution, load, slip, beta [deg], lateral)
+    (
+        sj.BekkerSoil(1.1, 5e3, 800e3, 1.5e3, 0.55, shear_modulus=0.02),
+        sj.WongReece(0.4, 0.3, -0.1),
+        3000.0,
+        0.3,
+        20.0,
+        Lateral(shear_modulus=0.03, unit_weight=14e3, bulldozing=True),
+    ),
+    (
+        sj.BekkerSoil(1.1, 5e3, 800e3, 1.5e3, 0.55, shear_modulus=0.02),
+        sj.WongReece(0.4, 0.3, -0.1),
+        3000.0,
+        -0.3,
+        -35.0,
+        Lateral(shear_modulus=0.01, unit_weight=14e3, bulldozing=True),
+    ),
+    (sj.WongSnow.thesis_fresh_snow(), None, 3500.0, 0.2, 15.0, Lateral()),
+    (sj.WongSnow.thesis_fresh_snow(), None, 3500.0, -0.4, 50.0, Lateral(unit_weight=3e3)),
+]
+
+
+def _law(terrain):
+    if isinstance(terrain, sj.BekkerSoil):
+        n, kc, kphi = float(terrain.n), float(terrain.k_c), float(terrain.k_phi)
+        return lambda z: (kc / 0.235 + kphi) * max(z, 0.0) ** n, math.radians(85)
+    p_w, z_w = float(terrain.p_w), float(terrain.z_w)
+    return (
+        lambda z: -p_w * math.log1p(-max(z, 0.0) / z_w),
+        math.acos(1 - 2 * z_w / 0.736) * (1 - 1e-9),
+    )
+
+
+@pytest.mark.parametrize("case", range(len(CASES)))
+def test_equilibrium_and_lateral_force_match_adaptive_quadrature(case):
+    terrain, dist, load, slip, deg, lateral = CASES[case]
+    beta = math.radians(deg)
+    st = sj.solve_wheel(
+        WHEEL, terrain, load, slip, distribution=dist, slip_angle=beta, lateral=lateral
+    )
+    assert int(st.status) == Status.CONVERGED
+    law, th_max = _law(terrain)
+    c, tp, K = float(terrain.cohesion), float(terrain.tan_phi), float(terrain.shear_modulus)
+    K_y = K if lateral.shear_modulus is None else float(lateral.shear_modulus)
+    fm, fr = (0.0, 0.0) if dist is None else (0.4 + 0.3 * slip, -0.1)
+    theta0, (w, r, t, m, fy, mz) = _reference_solve(
+        load, slip, beta, law, c, tp, K, K_y, fm, fr, float(lateral.unit_weight),
+        lateral.bulldozing, th_max,
+    )  # fmt: skip
+    assert float(st.entry_angle) == pytest.approx(theta0, rel=1e-7)
+    assert float(st.motion_resistance) == pytest.approx(r, rel=1e-6)
+    assert float(st.drawbar_pull) == pytest.approx(t - r, rel=1e-6, abs=1e-7 * load)
+    assert float(st.torque) == pytest.approx(m, rel=1e-6)
+    assert float(st.lateral_force) == pytest.approx(fy, rel=1e-6)
+    assert float(st.aligning_torque) == pytest.approx(mz, rel=1e-6, abs=1e-9 * load)
+    assert np.sign(float(st.lateral_force)) == np.sign(deg)
+
+
+# --------------------------------------------------------------------------------------
+# Straight running, symmetry, growth with the slip angle
+# --------------------------------------------------------------------------------------
+
+SLIPS = np.array([-0.5, -0.2, 0.0, 0.2, 0.5, 0.9])
+# Loads each snow carries (plate-rule snow: a shallow layer; Snow (U.S.): soft, 21 cm
+# sinkage at 1 kN).
+LOADS = {"fresh": 3000.0, "plate_rule": 1500.0, "snow_us": 1000.0}
+
+
+@pytest.mark.parametrize("name", ["fresh", "snow_us"])
+def test_zero_slip_angle_reproduces_straight_running(name):
+    terrain = SHIPPED_SNOWS[name]
+    dist = sj.WongReece(0.43, 0.32) if name == "snow_us" else None
+    loads = np.array([[1500.0], [4000.0]])
+    before = sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist)
+    # A concrete zero takes the same solver path: bit for bit.
+    same = sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist, slip_angle=0.0)
+    for field in ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque", "status"):
+        np.testing.assert_array_equal(getattr(same, field), getattr(before, field))
+    np.testing.assert_array_equal(same.lateral_force, 0.0)
+    # A traced zero takes the combined-shear quadrature: the same model.
+    traced = jax.jit(
+        lambda b: sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist, slip_angle=b)
+    )(0.0)
+    np.testing.assert_array_equal(traced.status, before.status)
+    np.testing.assert_allclose(traced.entry_angle, before.entry_angle, rtol=1e-9)
+    for field in ("motion_resistance", "drawbar_pull", "torque"):
+        np.testing.assert_allclose(
+            getattr(traced, field), getattr(before, field), rtol=1e-7, atol=1e-9 * 4000
+        )
+    np.testing.assert_array_equal(traced.lateral_force, 0.0)
+    np.testing.assert_array_equal(traced.aligning_torque, 0.0)
+
+
+@pytest.mark.parametrize("name", list(SHIPPED_SNOWS))
+def test_lateral_force_is_odd_and_grows_with_slip_angle_up_to_30_degrees(name):
+    terrain = SHIPPED_SNOWS[name]
+    betas = np.deg2rad(np.arange(2.5, 30.01, 2.5))[:, None]
+    both = np.concatenate([betas, -betas])
+    for lateral in (Lateral(), Lateral(unit_weight=3e3, bulldozing=True)):
+        st = sj.solve_wheel(WHEEL, terrain, LOADS[name], SLIPS, slip_angle=both, lateral=lateral)
+        assert np.all(st.status == Status.CONVERGED)
+        fy = np.asarray(st.lateral_force)
+        pos, neg = fy[: len(betas)], fy[len(betas) :]
+        np.testing.assert_allclose(neg, -pos, rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(
+            st.aligning_torque[len(betas) :], -st.aligning_torque[: len(betas)], rtol=1e-12
+        )
+        for field in ("entry_angle", "drawbar_pull", "torque"):
+            v = np.asarray(getattr(st, field))
+            np.testing.assert_allclose(v[len(betas) :], v[: len(betas)], rtol=1e-12, atol=1e-9)
+        assert np.all(pos > 0)
+        assert np.all(np.diff(pos, axis=0) > 0), np.diff(pos, axis=0)
+
+
+def test_resultant_shear_never_exceeds_mohr_coulomb():
+    """Under a large slip angle the combined stress takes strength from the longitudinal
+    direction: the traction of a driven wheel falls, the resultant stays bounded."""
+    snow = SHIPPED_SNOWS["fresh"]
+    st = sj.solve_wheel(WHEEL, snow, 3500.0, 0.3, slip_angle=np.deg2rad([0.1, 30.0, 60.0]))
+    assert np.all(np.diff(st.thrust) < 0)
+    # A wheel fully mobilised in every direction: |(T, F_y)| at most the strength's integral.
+    rb = 0.368 * 0.235
+    theta0 = float(st.entry_angle[-1])
+    bound = rb * float(snow.cohesion) * theta0 + float(snow.tan_phi) * float(
+        st.motion_resistance[-1]
+    )
+    bound += float(snow.tan_phi) * 3500.0
+    assert float(jnp.hypot(st.thrust[-1], st.lateral_force[-1])) < bound
+
+
+# --------------------------------------------------------------------------------------
+# Gradients
+# --------------------------------------------------------------------------------------
+
+
+def test_gradients_wrt_every_leaf_match_central_differences():
+    """d(sinkage, drawbar pull, F_y, M_z)/d(every leaf, load, slip, beta) against central
+    differences, on Bekker + Wong–Reece with bulldozing (the model with every term)."""
+    terrain = sj.BekkerSoil(1.1, 5e3, 800e3, 1.5e3, 0.55, shear_modulus=0.02)
+    dist = sj.WongReece(0.4, 0.3, -0.1)
+    lateral = Lateral(shear_modulus=0.03, unit_weight=14e3, bulldozing=True)
+    params = (WHEEL, terrain, dist, lateral, jnp.asarray(3000.0), jnp.asarray(0.25), 0.3)
+
+    def outputs(p):
+        wh, tr, ds, lt, load, slip, beta = p
+        st = sj.solve_wheel(wh, tr, load, slip, distribution=ds, slip_angle=beta, lateral=lt)
+        return jnp.stack([st.sinkage, st.drawbar_pull, st.lateral_force, st.aligning_torque])
+
+    jac = jax.jit(jax.jacfwd(outputs))(params)
+    jac_rev = jax.jit(jax.jacrev(outputs))(params)
+    flat, tree = jax.tree_util.tree_flatten(params)
+    flat_jac = jax.tree_util.tree_leaves(jac)
+    flat_rev = jax.tree_util.tree_leaves(jac_rev)
+    f = jax.jit(outputs)
+    scale = np.abs(np.asarray(f(params)))
+    for k, x in enumerate(flat):
+        h = 1e-6 * max(abs(float(x)), 1e-3)
+
+        def at(v, k=k):
+            leaves = list(flat)
+            leaves[k] = jnp.asarray(v, jnp.float64)
+            return np.asarray(f(jax.tree_util.tree_unflatten(tree, leaves)))
+
+        fd = (at(float(x) + h) - at(float(x) - h)) / (2 * h)
+        got = np.asarray(flat_jac[k])
+        err = np.abs(got - fd) * abs(float(x) if float(x) else 1.0) / np.maximum(scale, 1e-12)
+        assert np.all(err < 2e-5), (k, got, fd)
+        assert np.all(np.abs(np.asarray(flat_rev[k]) - got) <= 1e-9 * (np.abs(got) + scale)), k
+
+
+# --------------------------------------------------------------------------------------
+# Inputs, batching, float32
+# --------------------------------------------------------------------------------------
+
+
+def test_bad_slip_angle_and_lateral_inputs():
+    snow = SHIPPED_SNOWS["fresh"]
+    with pytest.raises(ValueError, match=r"slip_angle must be finite and in \(-pi/2, pi/2\)"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=2.0)
+    with pytest.raises(ValueError, match="slip_angle must be finite"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=[0.1, np.nan])
+    with pytest.raises(ValueError, match="lateral.shear_modulus must be finite and > 0 m"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=Lateral(-0.01))
+    with pytest.raises(ValueError, match="lateral.unit_weight"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=Lateral(None, -1.0))
+    with pytest.raises(TypeError, match="slip_angle must be a real number"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle="10 deg")
+    with pytest.raises(TypeError, match="lateral must be None or a snowjax.Lateral"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=0.02)
+    with pytest.raises(ValueError, match="simplified"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, "simplified", slip_angle=0.1)
+    with pytest.raises(ValueError, match="slip_angle"):
+        sj.solve_wheel(WHEEL, snow, 3000.0, [0.1, 0.2], slip_angle=[0.1, 0.2, 0.3])
+    # Under jit: a status per element, the rest of the batch solved.
+    st = jax.jit(lambda b: sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=b))(
+        jnp.array([0.2, 2.0, jnp.nan])
+    )
+    np.testing.assert_array_equal(st.status, [Status.CONVERGED, 2, 2])
+    assert np.isfinite(st.lateral_force[0]) and np.all(np.isnan(st.lateral_force[1:]))
+
+
+@pytest.mark.parametrize(
+    "terrain",
+    [
+        sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02),
+        sj.LayeredSnow.ice_layer_example(),
+    ],
+    ids=["reece", "layered"],
+)
+def test_every_terrain_law_batched_with_slip_angle(terrain):
+    betas = np.deg2rad([[-20.0], [0.0], [20.0]])
+    st = sj.solve_wheel(
+        WHEEL, terrain, 2500.0, [-0.3, 0.2], distribution=sj.WongReece(0.43, 0.32),
+        slip_angle=betas, lateral=Lateral(unit_weight=5e3, bulldozing=True),
+    )  # fmt: skip
+    assert st.lateral_force.shape == (3, 2)
+    assert np.all(st.status == Status.CONVERGED)
+    np.testing.assert_allclose(st.lateral_force[0], -st.lateral_force[2], rtol=1e-12)
+    assert np.all(st.lateral_force[2] > 0) and np.all(st.lateral_force[1] == 0)
+
+
+def test_float32_has_no_nan():
+    f32 = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32), t)  # noqa: E731
+    st = sj.solve_wheel(
+        f32(WHEEL), f32(SHIPPED_SNOWS["fresh"]), jnp.float32(3500.0),
+        jnp.asarray(SLIPS, jnp.float32), slip_angle=jnp.float32(0.4),
+        lateral=f32(Lateral(0.02, 3e3, bulldozing=True)),
+    )  # fmt: skip
+    assert st.lateral_force.dtype == jnp.float32
+    assert np.all(np.isfinite(st.lateral_force)) and np.all(st.status == Status.CONVERGED)
+    ref64 = sj.solve_wheel(
+        WHEEL, SHIPPED_SNOWS["fresh"], 3500.0, SLIPS, slip_angle=0.4,
+        lateral=Lateral(0.02, 3e3, bulldozing=True),
+    )  # fmt: skip
+    np.testing.assert_allclose(st.lateral_force, ref64.lateral_force, rtol=1e-4)
