@@ -334,3 +334,28 @@ def test_float32_has_no_nan():
         lateral=Lateral(0.02, 3e3, bulldozing=True),
     )  # fmt: skip
     np.testing.assert_allclose(st.lateral_force, ref64.lateral_force, rtol=1e-4)
+
+
+def test_fit_wheel_recovers_lateral_modulus_from_synthetic_lateral_forces():
+    """fit_wheel with slip angles: K_y and tan(phi) come back from noise-free synthetic
+    (sinkage, drawbar pull, lateral force) data made by solve_wheel."""
+    terrain = sj.BekkerSoil(1.1, 0.0, 800e3, 1.5e3, 0.55, shear_modulus=0.02)
+    dist = sj.WongReece(0.4, 0.2)
+    truth = Lateral(shear_modulus=0.035)
+    slips = np.array([-0.3, 0.0, 0.3, 0.6, -0.3, 0.0, 0.3, 0.6])
+    betas = np.deg2rad([10.0, 10.0, 10.0, 10.0, 30.0, 30.0, 30.0, 30.0])
+    loads = np.full(8, 3000.0)
+    st = sj.solve_wheel(
+        WHEEL, terrain, loads, slips, distribution=dist, slip_angle=betas, lateral=truth
+    )
+    start = sj.BekkerSoil(1.1, 0.0, 800e3, 1.5e3, 0.4, shear_modulus=0.02)
+    res = sj.fit_wheel(
+        WHEEL, start, loads, slips, sinkage=st.sinkage, drawbar_pull=st.drawbar_pull,
+        lateral_force=st.lateral_force, slip_angle=betas, distribution=dist,
+        lateral=Lateral(shear_modulus=0.02), fit=("tan_phi", "lateral.shear_modulus"),
+    )  # fmt: skip
+    assert res.params["tan_phi"] == pytest.approx(0.55, rel=1e-6)
+    assert res.params["lateral.shear_modulus"] == pytest.approx(0.035, rel=1e-6)
+    assert float(res.info["lateral"].shear_modulus) == pytest.approx(0.035, rel=1e-6)
+    with pytest.raises(ValueError, match="lateral_force data need the slip_angle"):
+        sj.fit_wheel(WHEEL, start, loads, slips, lateral_force=st.lateral_force, fit=("tan_phi",))

@@ -7,6 +7,12 @@ the CRREL shallow-snow model, Richmond (2.23), the chapter-4 rigid wheel (Wong a
 snow), Bekker (2.24/2.25) and Van Es (2.26), plus the CRM-1 worked examples of CRREL 95-1.
 Writes report.md, metrics.csv, predictions.csv, crrel_95_1_examples.csv and
 predicted_vs_measured.png.  JAX is imported lazily and runs in float64.
+
+`snowjax validate --single-wheel DIR` instead calibrates the wheel under slip angle on the
+single-wheel sand tests in DIR (robomechanics/3d-terramechanics; `../shared/data/
+3d-terramechanics` in this repository's CI) at beta = 0/30/60 deg and predicts 15/45 deg
+(and 75 deg, extrapolation): writes single_wheel.md, single_wheel_<wheel>.png and
+single_wheel_predictions.csv.
 """
 
 from __future__ import annotations
@@ -48,6 +54,14 @@ def register(sub) -> None:
         default=None,
         help="tyre width [m] (default 0.235, an assumption)",
     )
+    p.add_argument(
+        "--single-wheel",
+        type=pathlib.Path,
+        default=None,
+        metavar="DIR",
+        help="instead: calibrate and predict the single-wheel slip-angle sand tests in DIR "
+        "(smooth_wheel.csv, grousered_wheel.csv of robomechanics/3d-terramechanics)",
+    )
     p.set_defaults(run=run, parser=p)
 
 
@@ -68,6 +82,9 @@ def run(args) -> int:
         return _fail(f"--wheel-load must be a finite number > 0 (newtons), got {load}")
     if width is not None and not (math.isfinite(width) and 0 < width < 2):
         return _fail(f"--tyre-width must be in (0, 2) metres, got {width}")
+    single = getattr(args, "single_wheel", None)
+    if single is not None and not (pathlib.Path(single) / "smooth_wheel.csv").is_file():
+        return _fail(f"--single-wheel: no smooth_wheel.csv in {single}")
     try:
         args.out = _output_dir(str(args.out))
     except ValueError as err:
@@ -77,6 +94,15 @@ def run(args) -> int:
 
     jax.config.update("jax_enable_x64", True)
     from rich.console import Console
+
+    if single is not None:
+        from .._validate.single_wheel import write_single_wheel
+
+        start = time.perf_counter()
+        files = write_single_wheel(args.out, single, progress=True)
+        Console().print(files[2].read_text(encoding="utf-8"), markup=False)
+        print(f"{len(files)} files in {time.perf_counter() - start:.1f} s in {args.out}")
+        return 0
 
     from .._validate.validate import (
         DEFAULT_TYRE_WIDTH,

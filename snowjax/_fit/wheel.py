@@ -34,6 +34,7 @@ from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
+from .._wheel.lateral import Lateral
 from .core import (
     FitResult,
     NonFiniteModelError,
@@ -54,7 +55,7 @@ __all__ = [
 ]
 
 WHEEL_PARAMETERS = ("p_w", "z_w", "cohesion", "tan_phi", "shear_modulus")
-WHEEL_QUANTITIES = ("sinkage", "drawbar_pull", "motion_resistance")
+WHEEL_QUANTITIES = ("sinkage", "drawbar_pull", "motion_resistance", "lateral_force")
 _WHEEL_UNITS = {"p_w": "Pa", "z_w": "m", "cohesion": "Pa", "tan_phi": "-", "shear_modulus": "m"}
 
 # Scaled residual given to data points whose equilibrium failed at the current iterate
@@ -132,18 +133,21 @@ class _WheelResidual(eqx.Module):
     shear: ShearModel = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     solve_max_steps: int = eqx.field(static=True)
-    # (owner, field path) of each fitted variable; owner "terrain" or "distribution".
+    # (owner, field path) of each fitted variable; owner "terrain", "distribution" or
+    # "lateral".
     targets: tuple = eqx.field(static=True, default=())
 
     def __call__(self, u, args):
-        wheel, snow, distribution, load, slip, data, scale, transform = args
+        wheel, snow, distribution, lateral, load, slip, slip_angle, data, scale, transform = args
         values = transform(u)
-        new = {"terrain": {}, "distribution": {}}
+        new = {"terrain": {}, "distribution": {}, "lateral": {}}
         for i, (owner, path) in enumerate(self.targets):
             new[owner][path] = values[i]
         snow = _with_leaves(snow, new["terrain"])
         if distribution is not None:
             distribution = _with_leaves(distribution, new["distribution"])
+        if lateral is not None:
+            lateral = _with_leaves(lateral, new["lateral"])
         st = solve_wheel(
             wheel,
             snow,
@@ -151,6 +155,8 @@ class _WheelResidual(eqx.Module):
             slip,
             self.shear,
             distribution=distribution,
+            slip_angle=slip_angle,
+            lateral=lateral,
             nodes_per_panel=self.nodes_per_panel,
             max_steps=self.solve_max_steps,
         )
@@ -170,9 +176,17 @@ def _masked_residual(pred, data, scale, status):
     return jnp.where(ok, (safe_pred - data) / scale, _FAILED_RESIDUAL)
 
 
-def _resolve_fit_names(fit, terrain, distribution):
+def _lateral_names(lateral) -> dict[str, tuple[str, str]]:
+    """`lateral.<field>` -> ("lateral", field) for the array leaves of a `Lateral`."""
+    if lateral is None:
+        return {}
+    leaves = _module_leaves(lateral)
+    return {f"lateral.{p}": ("lateral", p) for p, v in leaves.items() if v is not None}
+
+
+def _resolve_fit_names(fit, terrain, distribution, lateral=None):
     """User names -> (canonical names, (owner, path) targets), or a ValueError."""
-    table = _parameter_names(terrain, distribution)
+    table = {**_parameter_names(terrain, distribution), **_lateral_names(lateral)}
     aliases = dict((name, name) for name in table)
     for name, (owner, path) in table.items():
         aliases.setdefault(f"{owner}.{path}", name)
@@ -182,6 +196,7 @@ def _resolve_fit_names(fit, terrain, distribution):
         allowed_txt = (
             f"{tuple(table)} (for {type(terrain).__name__}"
             + ("" if distribution is None else f" with {type(distribution).__name__}")
+            + ("" if lateral is None else " and Lateral")
             + "; the prefixed forms 'terrain.<name>' / 'distribution.<name>' work too)"
         )
     if isinstance(fit, str):
@@ -218,18 +233,31 @@ def _transform(targets, theta0) -> Transform:
 # ---------------------------------------------------------------------------------------
 
 
-def _wheel_data(load, slip, measured, scale):
-    """Checked loads [N], slips [-], measured quantities (quantities × points), scales."""
+def _wheel_data(load, slip, measured, scale, slip_angle=None):
+    """Checked loads [N], slips [-], measured quantities (quantities × points), scales,
+    slip angles [rad] (or None)."""
     ld = vector("load", load)
     sl = vector("slip", slip)
     m = same_length(load=ld, slip=sl)
+    sa = None
+    if slip_angle is not None:
+        sa = vector("slip_angle", slip_angle)
+        same_length(load=ld, slip_angle=sa)
+        if not (np.abs(sa) < np.pi / 2).all():
+            bad = sa[int(np.argmax(~(np.abs(sa) < np.pi / 2)))]
+            raise ValueError(f"slip_angle must lie in (-pi/2, pi/2) rad; got {bad!r}")
+    if measured.get("lateral_force") is not None and sa is None:
+        raise ValueError("lateral_force data need the slip_angle of every point")
     if (ld <= 0).any():
         raise ValueError(f"load must be > 0 N; got {ld[int(np.argmax(ld <= 0))]!r}")
     if (np.abs(sl) > 1).any():
         raise ValueError(f"slip must lie in [-1, 1]; got {sl[int(np.argmax(np.abs(sl) > 1))]!r}")
     quantities = tuple(q for q in WHEEL_QUANTITIES if measured[q] is not None)
     if not quantities:
-        raise ValueError("fit_wheel needs at least one of sinkage, drawbar_pull, motion_resistance")
+        raise ValueError(
+            "fit_wheel needs at least one of sinkage, drawbar_pull, motion_resistance, "
+            "lateral_force"
+        )
     rows = []
     for q in quantities:
         y = vector(q, measured[q])
@@ -251,21 +279,23 @@ def _wheel_data(load, slip, measured, scale):
             raise ValueError(f"the residual scale of {q} must be finite and > 0, got {s!r}")
         scales.append(np.broadcast_to(s, (m,)))
     # (quantities, points): one compilation for both forms
-    return ld, sl, m, quantities, data, np.stack(scales)
+    return ld, sl, m, quantities, data, np.stack(scales), sa
 
 
-def _start_values(snow, distribution, targets) -> dict[str, dict[str, float]]:
+def _start_values(snow, distribution, targets, lateral=None) -> dict[str, dict[str, float]]:
     """Every leaf as a float, owner -> path -> value: scalar, finite; log-space ones
     > 0 when fitted (>= 0 otherwise)."""
-    fitted_paths = {owner: {p for o, p in targets if o == owner}
-                    for owner in ("terrain", "distribution")}  # fmt: skip
-    start: dict[str, dict[str, float]] = {"terrain": {}, "distribution": {}}
-    objects = {"terrain": snow, "distribution": distribution}
-    labels = {"terrain": "snow", "distribution": "distribution"}
+    owners = ("terrain", "distribution", "lateral")
+    fitted_paths = {owner: {p for o, p in targets if o == owner} for owner in owners}
+    start: dict[str, dict[str, float]] = {owner: {} for owner in owners}
+    objects = {"terrain": snow, "distribution": distribution, "lateral": lateral}
+    labels = {"terrain": "snow", "distribution": "distribution", "lateral": "lateral"}
     for owner, obj in objects.items():
         if obj is None:
             continue
         for path, value in _module_leaves(obj).items():
+            if value is None:  # Lateral.shear_modulus None: the terrain's modulus
+                continue
             v = np.asarray(value, dtype=float)
             if v.size != 1:
                 raise ValueError(
@@ -402,6 +432,9 @@ def fit_wheel(
     nodes_per_panel: int | None = None,
     solve_max_steps: int = 64,
     distribution: WongReece | None = None,
+    slip_angle: Float[ArrayLike, " m"] | None = None,
+    lateral: Lateral | None = None,
+    lateral_force: Float[ArrayLike, " m"] | None = None,
 ) -> FitResult:
     """Fit terrain (and stress-distribution) parameters to wheel measurements through
     the equilibrium (4.14).
@@ -482,6 +515,13 @@ def fit_wheel(
       iteration limit).
     - `distribution`: `None` (the thesis's front-region stresses) or a
       `snowjax.WongReece` (c1, c2, c3 [-], scalar leaves) whose leaves can be fitted too.
+    - `slip_angle`: slip angle beta [rad] of every point (|beta| < pi/2), or None
+      (straight running); with it the model is `solve_wheel(..., slip_angle=beta,
+      lateral=lateral)`.
+    - `lateral`: a `snowjax.Lateral` (scalar leaves; default `Lateral()` when a
+      `slip_angle` is given); its leaves are fitted as `lateral.shear_modulus` (give it
+      a value to fit it) and `lateral.unit_weight`; `bulldozing` is held.
+    - `lateral_force`: measured lateral force F_y [N] per point (needs `slip_angle`).
 
     **Returns:** a `FitResult`; `info` has `snow` and `terrain` (the fitted terrain, of
     the type of `snow`), `distribution` (the fitted distribution or `None`),
@@ -509,7 +549,13 @@ def fit_wheel(
         raise TypeError(
             f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
         )
-    names, targets = _resolve_fit_names(fit, snow, distribution)
+    if lateral is not None and not isinstance(lateral, Lateral):
+        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    if slip_angle is not None and lateral is None:
+        lateral = Lateral()
+    if slip_angle is None:
+        lateral = None
+    names, targets = _resolve_fit_names(fit, snow, distribution, lateral)
     max_steps = check_max_steps(max_steps)
     if shear not in ("classic", "simplified", "none"):
         raise ValueError(f"shear must be 'classic', 'simplified' or 'none', got {shear!r}")
@@ -517,15 +563,15 @@ def fit_wheel(
     _check_model(wheel, snow, distribution, shear_model)
 
     measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,
-                "motion_resistance": motion_resistance}  # fmt: skip
-    ld, sl, m, quantities, data, scales = _wheel_data(load, slip, measured, scale)
+                "motion_resistance": motion_resistance, "lateral_force": lateral_force}  # fmt: skip
+    ld, sl, m, quantities, data, scales, sa = _wheel_data(load, slip, measured, scale, slip_angle)
     m_total = m * len(quantities)
     if m_total <= len(names):
         raise ValueError(
             f"fit_wheel fits {len(names)} parameters and needs more than {len(names)} "
             f"measured values; got {m_total}"
         )
-    start = _start_values(snow, distribution, targets)
+    start = _start_values(snow, distribution, targets, lateral)
     _check_solvable(wheel, snow, distribution, ld, sl, shear_model)
 
     dtype = jnp.result_type(float)
@@ -537,6 +583,7 @@ def fit_wheel(
     else:
         snow_a = _rebuild(snow, start["terrain"], dtype)
     dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
+    lateral_a = None if lateral is None else _rebuild(lateral, start["lateral"], dtype)
     theta0 = np.array([start[o][p] for o, p in targets])
     transform = _transform(targets, theta0)
     residual = _WheelResidual(
@@ -554,8 +601,10 @@ def fit_wheel(
         wheel_a,
         snow_a,
         dist_a,
+        lateral_a,
         jnp.asarray(ld, dtype),
         jnp.asarray(sl, dtype),
+        None if sa is None else jnp.asarray(sa, dtype),
         jnp.asarray(data, dtype),
         jnp.asarray(scales, dtype),
         transform.cast(dtype),
@@ -608,6 +657,7 @@ def fit_wheel(
     fitted_dist = None
     if distribution is not None:
         fitted_dist = _rebuild(distribution, final["distribution"], dtype)
+    fitted_lateral = None if lateral is None else _rebuild(lateral, final["lateral"], dtype)
     q_txt = ", ".join(quantities)
     model_txt = ""
     if not (isinstance(snow, WongSnow) and distribution is None):
@@ -627,6 +677,7 @@ def fit_wheel(
             "snow": fitted_snow,
             "terrain": fitted_snow,
             "distribution": fitted_dist,
+            "lateral": fitted_lateral,
             "transforms": {nm: "log" if log else "linear" for nm, log in zip(names, transform.log)},
             "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},
             "status": status,
