@@ -693,7 +693,9 @@ def solve_wheel(
             broadcast = np.broadcast_to if not _is_traced(load) else jnp.broadcast_to
             load = broadcast(load, shape)
             slip_angle = None
-    if slip_angle is not None:
+    if slip_angle is None:
+        lateral = None  # used only with a slip angle
+    else:
         lateral = Lateral() if lateral is None else lateral
         if shear == "simplified":
             raise ValueError(
@@ -712,32 +714,11 @@ def solve_wheel(
         )
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
     if slip_angle is not None:
-        small, large = _magnitude_window(
-            jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
-        )
+        dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
-        _check_rules(
-            _side_rules(*jax.tree_util.tree_map(concrete, side_trees)),
-            jnp.result_type(load, float),
-            small,
-            large,
-        )
-        n = _general_nodes_for(shear, nodes_per_panel)
-        return _solve_general_jit(
-            wheel,
-            terrain,
-            distribution,
-            load,
-            slip,
-            shear,
-            n,
-            int(max_steps),
-            initial_entry_angle,
-            _layout(slip),
-            slip_angle,
-            lateral,
-        )
-    if _is_thesis_path(terrain, distribution):
+        side_rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
+        _check_rules(side_rules, dtype, *_magnitude_window(dtype))
+    elif _is_thesis_path(terrain, distribution):
         n = _nodes_for(shear, nodes_per_panel)
         return _solve_wheel_jit(
             wheel,
@@ -762,4 +743,6 @@ def solve_wheel(
         int(max_steps),
         initial_entry_angle,
         _layout(slip),
+        slip_angle,
+        lateral,
     )
