@@ -66,6 +66,10 @@ from ._tire.slip import driving_from_longitudinal_slip as driving_from_longitudi
 from ._tire.slip import longitudinal_from_braking_slip as longitudinal_from_braking_slip
 from ._tire.slip import braking_from_longitudinal_slip as braking_from_longitudinal_slip
 
+# --- tire on snow (chapters 3 + 4) ---
+from ._coupled.tire_on_snow import TireOnSnowForces as TireOnSnowForces
+from ._coupled.tire_on_snow import tire_forces_on_snow as tire_forces_on_snow
+
 # --- empirical (chapter 2) ---
 from ._empirical.models import bekker_compaction_resistance as bekker_compaction_resistance
 from ._empirical.models import bekker_rolling_resistance as bekker_rolling_resistance

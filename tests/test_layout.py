@@ -21,7 +21,7 @@ ALLOWED = {
     "_tire": {"_leaves", "_constants"},
     "_empirical": {"_leaves", "_constants", "_terrain", "_wheel"},
 }
-WORKFLOWS = {"_fit", "_sweep", "_sim", "_validate", "_reproduce"}
+WORKFLOWS = {"_fit", "_sweep", "_sim", "_validate", "_reproduce", "_coupled"}
 MODELS = {"_leaves", "_constants", "_terrain", "_wheel", "_tire", "_empirical"}
 for name in WORKFLOWS:
     ALLOWED[name] = MODELS | WORKFLOWS

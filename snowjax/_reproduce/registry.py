@@ -29,7 +29,7 @@ import warnings
 from collections.abc import Sequence
 
 from .._constants import VERSION
-from . import chapter2, chapter3, chapter3_forces, chapter4, terrain
+from . import chapter2, chapter3, chapter3_forces, chapter4, terrain, tire_on_snow
 from .output import cell, md_table, thin, write_csv
 from .spec import Context, FigureResult, FigureSpec, TableSpec
 
@@ -59,6 +59,7 @@ FIGURES: tuple[FigureSpec, ...] = (
     chapter4.fig_4_7,
     chapter4.fig_4_8,
     terrain.fig_terrains,
+    tire_on_snow.fig_tire_on_snow,
 )
 
 # Report sections that are tables, after the figures: one line per table.
