@@ -168,6 +168,7 @@ class SingleWheelStudy:
     - `rms`: group -> (F_x [N], F_y [N], sinkage [m], rows) for "fit" (the calibration
       rows), "held_out" (the predicted angles) and "extrapolation".
     - `excluded`: group -> number of rows of those angles outside the model's range.
+    - `angles`: group -> the slip angles [deg] of that group.
     """
 
     data: SingleWheelData
@@ -181,7 +182,7 @@ class SingleWheelStudy:
     angles: dict
 
 
-def _start(wheel: str):
+def _start():
     """Start values: the upstream hand-tuned sand (set_soil_params.m) as a Bekker law."""
     terrain = BekkerSoil(
         n=1.46, k_c=0.0, k_phi=8.0e6, cohesion=1.0e3, tan_phi=math.tan(math.radians(29.0)),
@@ -222,7 +223,7 @@ def single_wheel_study(
     **Returns:** `SingleWheelStudy`; RMS errors are model - data over the named rows.
     """
     wheel = RigidWheel(2 * data.radius, data.width)
-    terrain, dist = _start(data.wheel)
+    terrain, dist = _start()
     sel = data.rows(fit_angles)
     fits = {}
     for bulldozing in (False, True):
