@@ -96,6 +96,11 @@ from ._fit.plate import thesis_plate_test as thesis_plate_test
 from ._fit.tire import thesis_tire_table as thesis_tire_table
 
 # --- vehicle simulation ---
+from ._sim.planar import PlanarTrajectory as PlanarTrajectory
+from ._sim.planar import PlanarVehicle as PlanarVehicle
+from ._sim.planar import SteeringProfile as SteeringProfile
+from ._sim.planar import planar_wheel_kinematics as planar_wheel_kinematics
+from ._sim.planar_stepping import simulate_planar as simulate_planar
 from ._sim.stepping import simulate_longitudinal as simulate_longitudinal
 from ._sim.vehicle import TorqueProfile as TorqueProfile
 from ._sim.vehicle import Trajectory as Trajectory

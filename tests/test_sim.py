@@ -268,6 +268,20 @@ def test_torque_below_the_self_propelled_torque_only_creeps(steady):
     assert 0 < float(traj.speed[-1]) < EPS
 
 
+def test_vmap_over_terrains_from_rest():
+    """A batch of two snows from rest in one vmapped program equals the two runs (this
+    raised in lineax while the damped Newton's Jacobian came from `jax.linearize`: NaN
+    tangents of the untaken branch of the equilibrium's `lax.cond`)."""
+    snows = [SNOW, sj.WongSnow.thesis_fresh_snow(p_w=50e3)]
+    batch = jax.tree.map(lambda a, b: jnp.stack([a, b]), *snows)
+    run = lambda snow: sj.simulate_longitudinal(VEHICLE, snow, 300.0, 0.2, 0.05)  # noqa: E731
+    speeds = jax.vmap(lambda snow: run(snow).speed)(batch)
+    assert np.all(np.isfinite(np.asarray(speeds)))
+    assert abs(float(speeds[0, -1] - speeds[1, -1])) > 1e-3  # independent rows
+    for k, snow in enumerate(snows):
+        np.testing.assert_allclose(speeds[k], run(snow).speed, rtol=1e-9, atol=1e-12)
+
+
 def test_a_step_not_solved_even_when_retried_stops_the_integration():
     """With one iteration allowed, the steps from rest are not solved even at the step-size
     controller's smallest step: the root finder's failure is the result, and the rows

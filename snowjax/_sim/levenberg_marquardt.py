@@ -51,8 +51,8 @@ def _lm_direction(jac, f, damping):
 class _LevenbergMarquardt(optx.AbstractRootFinder):
     """Levenberg–Marquardt root finder for small dense systems (Nielsen's damping update).
 
-    Each iteration evaluates the residual f and its dense Jacobian (`jax.linearize` +
-    `vmap`) at the trial point, compares the actual decrease of `|f|^2 / 2` with the
+    Each iteration evaluates the residual f and its dense Jacobian (`jax.jvp` vmapped over
+    the unit vectors) at the trial point, compares the actual decrease of `|f|^2 / 2` with the
     decrease predicted by the linear model, accepts the trial if the gain ratio is
     positive and adapts the damping (Nielsen 1999): close to a root it is Newton's method,
     in the S-shaped, kinked regions of the regularised wheel forces near rest it falls
@@ -91,8 +91,17 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         )
 
     def step(self, fn, y, args, options, state, tags):
-        f, lin, aux = jax.linearize(lambda z: fn(z, args), y, has_aux=True)
-        jac = jax.vmap(lin, out_axes=1)(jnp.eye(y.shape[0], dtype=y.dtype))
+        # The dense Jacobian as forward-mode tangents vmapped over the unit vectors.  Not
+        # `jax.linearize`: under an outer `jax.vmap` (a batch of simulations), its partial
+        # evaluation leaves zeros for the residuals of the untaken branch of each `lax.cond`
+        # inside `fn` (the wheel equilibrium's), the batched cond then evaluates both
+        # branches' tangents, and the implicit derivative of a root find in the untaken
+        # branch receives NaN, on which lineax raises.
+        def tangent(direction):
+            return jax.jvp(lambda z: fn(z, args), (y,), (direction,), has_aux=True)
+
+        eye = jnp.eye(y.shape[0], dtype=y.dtype)
+        f, jac, aux = jax.vmap(tangent, out_axes=(None, 1, None))(eye)
         merit = 0.5 * jnp.sum(f**2)
         finite = jnp.isfinite(merit) & jnp.all(jnp.isfinite(jac))
         first = ~jnp.isfinite(state.merit_acc)

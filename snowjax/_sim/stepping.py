@@ -30,6 +30,7 @@ by the implicit function theorem (`optimistix.ImplicitAdjoint`).
 
 from __future__ import annotations
 
+import abc
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -66,12 +67,24 @@ __all__ = ["simulate_longitudinal"]
 # ---------------------------------------------------------------------------------------
 
 
-class _VehicleTerm(diffrax.AbstractTerm):
-    """Right-hand side of the equations of motion, y = (v, x, omega_1..n).
+class _WarmStartTerm(diffrax.AbstractTerm):
+    """An ODE term whose `vf(t, y, hint)` returns `(dy/dt, entry_angles)`: the second
+    output is the warm start of the wheel equilibria for the next call, which is why
+    this is not a plain `diffrax.ODETerm`.  Base of the simulations' terms."""
 
-    `vf(t, y, hint)` returns `(dy/dt, entry_angles)`: the second output is the warm
-    start for the next call, which is why this is not a plain `diffrax.ODETerm`.
-    """
+    @abc.abstractmethod
+    def num_wheels(self, y0) -> int:
+        """Number of wheel equilibria (length of the warm start) for the state y0."""
+
+    def contr(self, t0, t1, **kwargs):
+        return t1 - t0
+
+    def prod(self, vf, control):
+        return vf[0] * control
+
+
+class _VehicleTerm(_WarmStartTerm):
+    """Right-hand side of the equations of motion, y = (v, x, omega_1..n)."""
 
     vehicle: Vehicle
     snow: Terrain
@@ -106,16 +119,13 @@ class _VehicleTerm(diffrax.AbstractTerm):
         domega = (applied - f.resisting_torque) / inertia
         return jnp.concatenate([dv[None], y[:1], domega]), f.entry_angle
 
-    def contr(self, t0, t1, **kwargs):
-        return t1 - t0
-
-    def prod(self, vf, control):
-        return vf[0] * control
+    def num_wheels(self, y0):
+        return y0.shape[0] - 2
 
 
 # Kept: diffrax.ImplicitEuler has no state for the warm start and keeps failed steps.
 class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
-    """Implicit Euler for `_VehicleTerm`, warm-starting the wheel equilibria.
+    """Implicit Euler for a `_WarmStartTerm`, warm-starting the wheel equilibria.
 
     Kept instead of `diffrax.ImplicitEuler`, which has no solver state for the warm start
     and keeps a step whose root find failed, ending the integration (see the tests).
@@ -130,7 +140,7 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
     result and ends the integration.
     """
 
-    term_structure: ClassVar = _VehicleTerm
+    term_structure: ClassVar = _WarmStartTerm
     interpolation_cls: ClassVar = diffrax.LocalLinearInterpolation
     rtol: float
     atol: float
@@ -140,9 +150,12 @@ class _WarmStartImplicitEuler(diffrax.AbstractAdaptiveSolver):
         return 1
 
     def init(self, terms, t0, t1, y0, args):
-        n = y0.shape[0] - 2
+        term = terms
+        while not isinstance(term, _WarmStartTerm):  # unwrap diffrax's WrapTerm
+            term = term.term
+        hint = jnp.full((term.num_wheels(y0),), jnp.nan, y0.dtype)
         unknown = jnp.full_like(y0, jnp.nan)  # no increments yet
-        return jnp.full((n,), jnp.nan, y0.dtype), unknown, unknown, jnp.asarray(t1 - t0, y0.dtype)
+        return hint, unknown, unknown, jnp.asarray(t1 - t0, y0.dtype)
 
     def step(self, terms, t0, t1, y0, args, solver_state, made_jump):
         hint, increment, previous, h_prev = solver_state
@@ -189,8 +202,9 @@ def _tolerances(dtype):
     return (1e-9, 1e-9) if dtype == jnp.float64 else (1e-5, 1e-6)
 
 
-@eqx.filter_jit
-def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
+def _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
+    """Implicit Euler steps of `dt` from y0 over `n_steps` of a `_WarmStartTerm`:
+    (saved times, diffrax solution).  Shared by the simulations of this package."""
     dtype = y0.dtype
     rtol, atol = _tolerances(dtype)
     ts = jnp.arange(n_steps + 1, dtype=dtype) * jnp.asarray(dt, dtype)
@@ -218,6 +232,32 @@ def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
         max_steps=2 * n_steps + 64,
         throw=False,
     )
+    return save_ts, sol
+
+
+def _check_run(wheel, snow, distribution, shear, t1, dt, speed_eps, save_every) -> int:
+    """Checks shared by the simulations' entry points; returns the number of steps."""
+    _check_shear(shear)
+    if not isinstance(snow, Terrain):
+        raise TypeError(
+            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
+            f"got {type(snow).__name__}"
+        )
+    _check_model(wheel, snow, distribution, shear)
+    for name, value in (("t1", t1), ("dt", dt), ("speed_eps", speed_eps)):
+        if not (np.isfinite(value) and value > 0):
+            raise ValueError(f"{name} must be finite and > 0; got {value!r}")
+    n_steps = int(round(t1 / dt))
+    if n_steps < 1:
+        raise ValueError(f"t1 / dt must be >= 1 step; got t1={t1!r}, dt={dt!r}")
+    if int(save_every) < 1:
+        raise ValueError(f"save_every must be a positive integer; got {save_every!r}")
+    return n_steps
+
+
+@eqx.filter_jit
+def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
+    save_ts, sol = _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps)
     ys = sol.ys
     assert ys is not None  # saveat=SaveAt(ts=...) saves the states
     # Wheel outputs at the saved states: one batched (cold-started) equilibrium solve.
@@ -321,23 +361,9 @@ def simulate_longitudinal(
     `result`; differentiated, they make lineax raise on the non-finite values inside
     the implicit solves, so optimise positive parameters through their logarithms.
     """
-    _check_shear(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
-    if not isinstance(snow, Terrain):
-        raise TypeError(
-            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
-            f"got {type(snow).__name__}"
-        )
-    _check_model(vehicle.wheel, snow, distribution, shear)
-    for name, value in (("t1", t1), ("dt", dt), ("speed_eps", speed_eps)):
-        if not (np.isfinite(value) and value > 0):
-            raise ValueError(f"{name} must be finite and > 0; got {value!r}")
-    n_steps = int(round(t1 / dt))
-    if n_steps < 1:
-        raise ValueError(f"t1 / dt must be >= 1 step; got t1={t1!r}, dt={dt!r}")
-    if int(save_every) < 1:
-        raise ValueError(f"save_every must be a positive integer; got {save_every!r}")
+    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)
     _check_concrete("vehicle.mass", vehicle.mass, lambda x: x > 0, "> 0 kg")
     _check_concrete("vehicle.wheel_inertia", vehicle.wheel_inertia, lambda x: x > 0, "> 0 kg m^2")
     _check_concrete("initial_speed", initial_speed, lambda x: np.ones_like(x, bool), "[m/s]")
