@@ -93,6 +93,40 @@ print(first - (time.perf_counter() - t))
     return float(out.stdout.strip().splitlines()[-1])
 
 
+def two_cores(n, repeats=3):
+    """Throughput [1/s] of a batch of n on one of two host CPU devices and split over both
+    (one program per device, as `sweep` does), in a fresh process with
+    `XLA_FLAGS=--xla_force_host_platform_device_count=2`; best of `repeats` (one device
+    timed before and after)."""
+    code = f"""
+import time, jax, numpy as np
+jax.config.update("jax_enable_x64", True)
+import snowjax as sj
+w, s = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
+rng = np.random.default_rng(0)
+load, slip = rng.uniform(1e3, 9e3, {n}), rng.uniform(0.0, 0.9, {n})
+devices, h = jax.devices()[:2], {n} // 2
+parts = [[jax.device_put(x[k * h:(k + 1) * h], d) for x in (load, slip)]
+         for k, d in enumerate(devices)]
+solve = lambda ps: [sj.solve_wheel(w, s, *p).entry_angle for p in ps]
+jax.block_until_ready(solve(parts))
+def timed(ps):
+    t = time.perf_counter()
+    jax.block_until_ready(solve(ps))
+    return time.perf_counter() - t
+one = min(timed(parts[:1]) for _ in range({repeats}))
+both = min(timed(parts) for _ in range({repeats}))
+one = min(one, *(timed(parts[:1]) for _ in range({repeats})))
+print(h / one, 2 * h / both)
+"""
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
+    )
+    one, both = (float(x) for x in out.stdout.strip().splitlines()[-1].split())
+    return one, both
+
+
 def gradient_ratio(n, repeats=3):
     """Cost of d(sinkage, motion resistance, drawbar pull)/d(p_w, z_w, tan phi), vs forward."""
     load, slip = inputs(n)
@@ -105,11 +139,12 @@ def gradient_ratio(n, repeats=3):
 
     fwd = jax.jit(outputs)
     jac = jax.jit(jax.jacfwd(outputs))  # (3, n, 3): every element's 3x3 Jacobian
-    fwd(params).block_until_ready()
-    jac(params).block_until_ready()
-    t_fwd = best_time(lambda: fwd(params).block_until_ready(), repeats)
-    t_jac = best_time(lambda: jac(params).block_until_ready(), repeats)
-    return t_jac / t_fwd, t_fwd, t_jac
+    grad = jax.jit(jax.grad(lambda p: jnp.sum(outputs(p))))  # one scalar over the batch
+    times = {}
+    for name, fn in (("forward", fwd), ("jacfwd", jac), ("grad", grad)):
+        fn(params).block_until_ready()
+        times[name] = best_time(lambda fn=fn: fn(params).block_until_ready(), repeats)
+    return times
 
 
 def in_step_latency(n_steps, n_wheels=4):
@@ -234,6 +269,14 @@ def main(argv=None):
             numbers[f"throughput_{n}"] = rate
             add(f"solve_wheel, batch {n:,}", f"{rate:,.0f} /s", f"{t * 1e3:.2f} ms per call")
             progress.advance(task)
+        one, both = two_cores(sizes[-1], repeats=2 if args.quick else 3)
+        numbers.update(two_core_ratio=both / one)
+        add(
+            f"2 host CPU devices / 1, batch {sizes[-1]:,}",
+            f"{both / one:.2f}x",
+            f"one device {one:,.0f} /s, both {both:,.0f} /s (target >= 1.7x; a slice per"
+            " device, fresh process with --xla_force_host_platform_device_count=2)",
+        )
         balance = sj.contact_forces(WHEEL, SNOW, st.entry_angle, inputs(sizes[-1])[1]).vertical_load
         numbers["max_load_balance_error"] = float(
             np.max(np.abs(np.asarray(balance) / inputs(sizes[-1])[0] - 1))
@@ -260,40 +303,49 @@ def main(argv=None):
                 f"{rate:,.0f} /s",
                 f"classic: {numbers[f'throughput_{n_ref}']:,.0f} /s",
             )
-        # Every terrain law and the Wong-Reece distribution, same loads and slips, wheel
-        # 1.0 m x 0.4 m where the thesis snow's tyre would exceed 85 degrees on Bekker snow.
+        # Every terrain law, the Wong-Reece distribution and the slip-angle wheel: same
+        # slips, loads scaled into each terrain's range (the thesis tyre would pass
+        # 85 degrees on the softer soils at 9 kN).
         load, slip = inputs(n_ref)
-        terrains = {
-            "WongSnow + Wong-Reece": (SNOW, sj.WongReece(0.43, 0.32), WHEEL, load),
-            "BekkerSoil.snow_us, front region": (sj.BekkerSoil.snow_us(), None, WHEEL, load / 9),
-            "BekkerSoil.snow_us + Wong-Reece": (
-                sj.BekkerSoil.snow_us(),
-                sj.WongReece(0.43, 0.32),
-                WHEEL,
-                load / 9,
-            ),
+        wong_reece = sj.WongReece(0.43, 0.32)
+        reece = sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02)
+        beta = np.deg2rad(10.0)
+        bulldozing = sj.Lateral(unit_weight=5e3, bulldozing=True)
+        terrains = {  # name: (terrain, distribution, load divisor, slip angle, lateral)
+            "WongSnow + Wong-Reece": (SNOW, wong_reece, 1, 0.0, None),
+            "BekkerSoil.snow_us, front region": (sj.BekkerSoil.snow_us(), None, 9, 0.0, None),
+            "BekkerSoil.snow_us + Wong-Reece": (sj.BekkerSoil.snow_us(), wong_reece, 9, 0.0, None),
+            "ReeceSoil (test sand), front region": (reece, None, 4, 0.0, None),
+            "ReeceSoil (test sand) + Wong-Reece": (reece, wong_reece, 4, 0.0, None),
             "LayeredSnow.ice_layer_example, front region": (
-                sj.LayeredSnow.ice_layer_example(),
-                None,
-                WHEEL,
-                load / 4,
+                sj.LayeredSnow.ice_layer_example(), None, 4, 0.0, None,
             ),
-        }
-        for name, (terrain, dist, wheel, ld) in terrains.items():
+            "WongSnow, slip angle 10 deg, front region": (SNOW, None, 1, beta, None),
+            "WongSnow, slip angle 10 deg + Wong-Reece + bulldozing": (
+                SNOW, wong_reece, 1, beta, bulldozing,
+            ),
+        }  # fmt: skip
+        for name, (terrain, dist, divisor, angle, lateral) in terrains.items():
 
-            def run(wheel=wheel, terrain=terrain, ld=ld, dist=dist):
-                st = sj.solve_wheel(wheel, terrain, ld, slip, distribution=dist)
+            def run(terrain=terrain, dist=dist, ld=load / divisor, angle=angle, lateral=lateral):
+                st = sj.solve_wheel(
+                    WHEEL, terrain, ld, slip, distribution=dist, slip_angle=angle, lateral=lateral
+                )
                 st.entry_angle.block_until_ready()
+                return st
 
-            run()
+            codes, counts = np.unique(np.asarray(run().status), return_counts=True)
+            statuses = ", ".join(
+                f"{sj.Status(int(c)).name} {k / n_ref:.2f}" for c, k in zip(codes, counts)
+            )
             t = best_time(run, 2)
             numbers[f"throughput_{name}"] = n_ref / t
             add(
                 f"solve_wheel {name}, batch {n_ref:,}",
                 f"{n_ref / t:,.0f} /s",
                 f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; "
-                + "loads "
-                + ("1-9 kN" if ld is load else f"1-9 kN / {9 if 'Bekker' in name else 4}"),
+                + ("loads 1-9 kN" if divisor == 1 else f"loads 1-9 kN / {divisor}")
+                + f"; status {statuses}",
             )
         progress.advance(task)
         rate32, err32, finite32 = float32_error(n_ref)
@@ -304,13 +356,19 @@ def main(argv=None):
             f"max sinkage error vs float64 {err32:.1e}; finite fraction {finite32:.3f}",
         )
         progress.advance(task)
-        ratio, t_fwd, t_jac = gradient_ratio(n_ref)
-        numbers.update(gradient_ratio=ratio)
-        add(
-            f"jacfwd of 3 outputs w.r.t. (p_w, z_w, tan phi), batch {n_ref:,}",
-            f"{ratio:.2f} x forward",
-            f"forward {t_fwd * 1e3:.0f} ms, Jacobian {t_jac * 1e3:.0f} ms",
-        )
+        times = gradient_ratio(n_ref)
+        for name, what in (
+            ("jacfwd", "jacfwd of 3 outputs"),
+            ("grad", "jax.grad of their sum over the batch"),
+        ):
+            ratio = times[name] / times["forward"]
+            numbers[f"gradient_ratio_{name}"] = ratio
+            add(
+                f"{what} w.r.t. (p_w, z_w, tan phi), batch {n_ref:,}",
+                f"{ratio:.2f} x forward",
+                f"forward {times['forward'] * 1e3:.0f} ms, {name} {times[name] * 1e3:.0f} ms"
+                " (target <= 1.5x)",
+            )
         progress.advance(task)
         for shear in ("classic",):
             c = compile_time(shear)

@@ -16,8 +16,11 @@ list (zipped arrays) of loads x slips x parameter sets, in chunks of a fixed siz
   restart with the same definition validates the chunks on disk (loadable, right columns,
   dtypes and flat indices), recomputes the missing or damaged ones and skips the rest;
   a restart with a different definition refuses with a `ValueError`.
-- **Sharded.**  The rows of a chunk are spread over the local JAX devices with
-  `jax.sharding.NamedSharding(Mesh(devices, ("batch",)), P("batch"))`; with several
+- **Sharded.**  The rows of a chunk are split over the local JAX devices, each device
+  solving its slice as its own program (dispatched asynchronously, so the devices run
+  concurrently; on a CPU, `XLA_FLAGS=--xla_force_host_platform_device_count=N` set
+  before JAX starts makes N host devices, one per core; each compiles its own program,
+  about 5 s on a CPU, so this pays only for long sweeps); with several
   processes (`jax.distributed.initialize`) chunk k is computed by process
   `k % process_count`, so the processes write disjoint chunks into a shared directory.
 - **Outputs.**  Once every chunk is on disk the chunks are concatenated, streaming one
@@ -88,27 +91,19 @@ from .storage import (
 
 
 class _Solver:
-    """Dispatches chunks to `solve_wheel`, rows sharded over the devices of a 1-D mesh."""
+    """Dispatches chunks to `solve_wheel`: each device solves its own slice of the chunk,
+    one program per device, dispatched asynchronously."""
 
     def __init__(self, d: _Definition, devices):
-        import jax
-        from jax.sharding import Mesh, NamedSharding, PartitionSpec
-
         self.d = d
-        self.n_devices = len(devices)
-        # Pad every chunk to the same multiple of the device count: one compile.
+        self.devices = list(devices)
+        self.n_devices = len(self.devices)
+        # Pad every chunk to the same multiple of the device count: one program shape.
         self.padded = -(-d.chunk_size // self.n_devices) * self.n_devices
-        if self.n_devices > 1:
-            mesh = Mesh(np.asarray(devices), ("batch",))
-            sharding = NamedSharding(mesh, PartitionSpec("batch"))
-            self.place = lambda x: jax.device_put(x, sharding)  # noqa: E731
-        else:
-            # One device: leave the placement to jit, so the sweep shares its compiled
-            # solve with plain `solve_wheel` calls of the same shape.
-            self.place = lambda x: x  # noqa: E731
 
     def submit(self, k: int):
         """Start solving chunk k (asynchronous dispatch); returns a handle for `result`."""
+        import jax
         import jax.numpy as jnp
 
         from .._wheel.equilibrium import solve_wheel
@@ -116,25 +111,45 @@ class _Solver:
         rows = self.d.chunk_inputs(k)
         n = rows["index"].size
         pad = lambda x: np.pad(x, (0, self.padded - n), mode="edge")  # noqa: E731
-        x = {f: jnp.asarray(self.place(pad(rows[f]))) for f in ("load", "slip", *self.d.parameters)}
-        wheel, terrain, distribution = self.d.build(x)
-        state = solve_wheel(
-            wheel,
-            terrain,
-            x["load"],
-            x["slip"],
-            self.d.shear,
-            distribution=distribution,
-            nodes_per_panel=self.d.nodes_per_panel,
-            max_steps=self.d.max_steps,
-        )
-        return k, rows, n, state
+        columns = {f: pad(rows[f]) for f in ("load", "slip", *self.d.parameters)}
+        size = self.padded // self.n_devices
+        states = []
+        for j, device in enumerate(self.devices):
+            if self.n_devices == 1:
+                # Placement left to jit: the sweep shares its compiled solve with plain
+                # `solve_wheel` calls of the same shape.
+                x = {f: jnp.asarray(v) for f, v in columns.items()}
+            else:
+                # A slice per device, each its own program, not one program sharded over
+                # a mesh: the batch-wide convergence test of the Newton loop would then
+                # synchronise the devices every iteration (two host CPU devices, batch
+                # 1e5: the sharded solve measured 0.8x one device's throughput, this
+                # 1.6x; at batch 1e6 `benchmarks/run.py` measures 0.97x, not understood).
+                x = {
+                    f: jax.device_put(v[j * size : (j + 1) * size], device)
+                    for f, v in columns.items()
+                }
+            wheel, terrain, distribution = self.d.build(x)
+            states.append(
+                solve_wheel(
+                    wheel,
+                    terrain,
+                    x["load"],
+                    x["slip"],
+                    self.d.shear,
+                    distribution=distribution,
+                    nodes_per_panel=self.d.nodes_per_panel,
+                    max_steps=self.d.max_steps,
+                )
+            )
+        return k, rows, n, states
 
     def result(self, handle) -> tuple[int, dict[str, np.ndarray]]:
-        k, rows, n, state = handle
+        k, rows, n, states = handle
         out = {name: rows[name] for name in self.d.columns if name in rows}
         for name in (*_OUTPUT_FIELDS, "status"):
-            out[name] = np.asarray(getattr(state, name))[:n].astype(self.d.columns[name])
+            value = np.concatenate([np.asarray(getattr(state, name)) for state in states])
+            out[name] = value[:n].astype(self.d.columns[name])
         return k, {name: out[name] for name in self.d.columns}
 
 
