@@ -78,7 +78,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import RigidWheel
-from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _kinematics
+from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
     "MAX_MODEL_SLIP_ANGLE",
@@ -211,8 +211,7 @@ def _check_steering_profile(profile: SteeringProfile) -> None:
             "SteeringProfile: times and values must both have shape (k,); "
             f"got {times.shape} and {values.shape}"
         )
-    if not _is_traced(times) and not np.all(np.diff(np.asarray(times, dtype=float)) > 0):
-        raise ValueError("SteeringProfile: times must be strictly increasing")
+    _check_increasing("SteeringProfile", times)
     if not _is_traced(values):
         arr = np.asarray(values, dtype=float)
         if not np.all(np.isfinite(arr) & (np.abs(arr) < np.pi / 2)):

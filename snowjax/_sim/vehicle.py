@@ -388,5 +388,10 @@ def _check_profile(profile, n):
             "TorqueProfile: times must have shape (k,) and values (k,) or (k, num_wheels);"
             f" got {times.shape} and {values.shape} for {n} wheels"
         )
+    _check_increasing("TorqueProfile", times)
+
+
+def _check_increasing(owner, times):
+    """Knot times [s] of a profile strictly increasing (when concrete)."""
     if not _is_traced(times) and not np.all(np.diff(np.asarray(times, dtype=float)) > 0):
-        raise ValueError("TorqueProfile: times must be strictly increasing")
+        raise ValueError(f"{owner}: times must be strictly increasing")

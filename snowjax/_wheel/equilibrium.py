@@ -702,7 +702,7 @@ def solve_wheel(
                 "shear='simplified' (eq. 4.13) has no lateral counterpart: use "
                 "shear='classic' (or 'none') with a slip_angle."
             )
-    side_trees = (slip_angle, lateral) if slip_angle is not None else (None, None)
+    side_trees = (slip_angle, lateral)  # both None without a slip angle
     shape = _broadcast_shape(
         wheel, terrain, distribution, load, slip, initial_entry_angle, *side_trees
     )
