@@ -26,6 +26,11 @@ import time
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))  # for tests/reference.py (the independent SciPy reference)
 sys.path.insert(0, str(ROOT / "benchmarks"))
+# The CPU table runs on the CPU even where a GPU is installed; the GPU rows are measured
+# by a child process of this script (`--gpu-child`), which keeps JAX's default platform.
+GPU_CHILD = "--gpu-child" in sys.argv
+if not GPU_CHILD:
+    os.environ["JAX_PLATFORMS"] = "cpu"
 
 import jax  # noqa: E402
 
@@ -93,38 +98,52 @@ print(first - (time.perf_counter() - t))
     return float(out.stdout.strip().splitlines()[-1])
 
 
-def two_cores(n, repeats=3):
-    """Throughput [1/s] of a batch of n on one of two host CPU devices and split over both
-    (one program per device, as `sweep` does), in a fresh process with
-    `XLA_FLAGS=--xla_force_host_platform_device_count=2`; best of `repeats` (one device
-    timed before and after)."""
-    code = f"""
-import time, jax, numpy as np
+_CORE_JOB = """
+import os, sys, time
+core, n, repeats, start_at = (int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3]),
+                              float(sys.argv[4]))
+if core >= 0:
+    os.sched_setaffinity(0, {core})
+import jax, numpy as np
 jax.config.update("jax_enable_x64", True)
 import snowjax as sj
 w, s = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
-rng = np.random.default_rng(0)
-load, slip = rng.uniform(1e3, 9e3, {n}), rng.uniform(0.0, 0.9, {n})
-devices, h = jax.devices()[:2], {n} // 2
-parts = [[jax.device_put(x[k * h:(k + 1) * h], d) for x in (load, slip)]
-         for k, d in enumerate(devices)]
-solve = lambda ps: [sj.solve_wheel(w, s, *p).entry_angle for p in ps]
-jax.block_until_ready(solve(parts))
-def timed(ps):
+rng = np.random.default_rng(max(core, 0))
+load, slip = rng.uniform(1e3, 9e3, n), rng.uniform(0.0, 0.9, n)
+sj.solve_wheel(w, s, load, slip).entry_angle.block_until_ready()
+time.sleep(max(0.0, start_at - time.time()))  # workers start timing together
+best = 1e9
+for _ in range(repeats):
     t = time.perf_counter()
-    jax.block_until_ready(solve(ps))
-    return time.perf_counter() - t
-one = min(timed(parts[:1]) for _ in range({repeats}))
-both = min(timed(parts) for _ in range({repeats}))
-one = min(one, *(timed(parts[:1]) for _ in range({repeats})))
-print(h / one, 2 * h / both)
+    sj.solve_wheel(w, s, load, slip).entry_angle.block_until_ready()
+    best = min(best, time.perf_counter() - t)
+print(best)
 """
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=2")
-    out = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, check=True, env=env
-    )
-    one, both = (float(x) for x in out.stdout.strip().splitlines()[-1].split())
-    return one, both
+
+
+def _core_jobs(cores, n, repeats):
+    """Seconds per solve of a batch of n in one fresh process per entry of `cores` (a core
+    to pin it to, or -1 for none), all timing at the same moment."""
+    start_at = time.time() + 25.0  # after every process's import and compile
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", _CORE_JOB, str(c), str(n), str(repeats), str(start_at)],
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        for c in cores
+    ]
+    return [float(p.communicate()[0].strip().splitlines()[-1]) for p in procs]
+
+
+def two_cores(n, repeats=3):
+    """Throughput [1/s] of batches of n on the machine's first two cores: one process
+    pinned to one core, one unpinned process (XLA:CPU's own threads), and two processes
+    pinned to a core each with n/2 points each (what `sweep` does with `workers=2`)."""
+    (one,) = _core_jobs([0], n, repeats)
+    (plain,) = _core_jobs([-1], n, repeats)
+    pair = _core_jobs([0, 1], n // 2, repeats)
+    return n / one, n / plain, 2 * (n // 2) / max(pair)
 
 
 def gradient_ratio(n, repeats=3):
@@ -147,21 +166,36 @@ def gradient_ratio(n, repeats=3):
     return times
 
 
-def in_step_latency(n_steps, n_wheels=4):
-    """Per-wheel cost of solve_wheel inside a jitted lax.scan step, warm-started."""
-    loads = jnp.full(n_wheels, 5000.0)
-    offsets = jnp.arange(n_wheels, dtype=float)
+def in_step_latency(n_steps, n_wheels=4, n_vehicles=1):
+    """Per-wheel cost of solve_wheel inside a jitted lax.scan step, warm-started, for
+    `n_vehicles` vehicles of `n_wheels` wheels solved together each step."""
+    shape = (n_vehicles, n_wheels)
+    loads = jnp.full(shape, 5000.0)
+    offsets = jnp.arange(n_vehicles * n_wheels, dtype=float).reshape(shape)
 
     def step(theta, t):
         slip = 0.25 + 0.2 * jnp.sin(0.01 * t + offsets)  # slips change every step
         st = sj.solve_wheel(WHEEL, SNOW, loads, slip, initial_entry_angle=theta)
-        return st.entry_angle, st.drawbar_pull
+        return st.entry_angle, st.drawbar_pull[0]
 
-    run = jax.jit(lambda ts: jax.lax.scan(step, jnp.full(n_wheels, 0.5), ts))
+    run = jax.jit(lambda ts: jax.lax.scan(step, jnp.full(shape, 0.5), ts))
     ts = jnp.arange(n_steps, dtype=float)
     jax.block_until_ready(run(ts))
     t = best_time(lambda: jax.block_until_ready(run(ts)), 3)
-    return t / n_steps / n_wheels
+    return t / n_steps / (n_vehicles * n_wheels)
+
+
+def in_step_latency_pinned(n_steps):
+    """`in_step_latency` (4 wheels) in a fresh process pinned to one core: at this size
+    the step is a few hundred small kernels, and an unpinned process's time varies by
+    +-30 % with the core XLA's threads land on."""
+    code = (
+        "import os, sys; os.sched_setaffinity(0, {0}); sys.argv = ['run.py'];"
+        f" sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); import run;"
+        f" print(run.in_step_latency({n_steps}))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return float(out.stdout.strip().splitlines()[-1])
 
 
 def simulation_step_cost(n_steps):
@@ -222,6 +256,67 @@ def float32_error(n):
     return rate32, float(err), float(np.mean(np.isfinite(np.asarray(st32.drawbar_pull))))
 
 
+def gpu_rows(quick):
+    """Rows measured on the GPU (run in the `--gpu-child` process): float32 and float64
+    throughput for batches up to 10^7, the gradient ratios and the in-step latency for
+    10^4 vehicles of 4 wheels."""
+    rows, numbers = [], {}
+    sizes = [10_000, 100_000, 1_000_000] + ([] if quick else [10_000_000])
+    for dtype, name in ((np.float32, "float32"), (np.float64, "float64")):
+        for n in sizes:
+            rate, t, st = throughput(n, dtype=dtype, repeats=3)
+            ok = float(np.mean(np.asarray(st.status) == 0))
+            numbers[f"gpu_throughput_{name}_{n}"] = rate
+            rows.append(
+                (
+                    f"GPU solve_wheel {name}, batch {n:,}",
+                    f"{rate:,.0f} /s",
+                    f"{t * 1e3:.2f} ms per call; converged {ok:.3f}"
+                    + ("; target >= 1e8 /s (H100)" if name == "float32" else ""),
+                )
+            )
+    n_grad = 100_000 if quick else 1_000_000
+    times = gradient_ratio(n_grad)
+    for name in ("jacfwd", "grad"):
+        ratio = times[name] / times["forward"]
+        numbers[f"gpu_gradient_ratio_{name}"] = ratio
+        rows.append(
+            (
+                f"GPU {name} w.r.t. (p_w, z_w, tan phi), batch {n_grad:,}",
+                f"{ratio:.2f} x forward",
+                f"forward {times['forward'] * 1e3:.1f} ms (target <= 1.5x)",
+            )
+        )
+    lat = in_step_latency(100 if quick else 300, n_vehicles=10_000)
+    numbers["gpu_in_step_ns_per_wheel"] = lat * 1e9
+    rows.append(
+        (
+            "GPU in-step latency, 10,000 vehicles x 4 wheels (lax.scan, warm start)",
+            f"{lat * 1e9:.1f} ns per wheel",
+            f"{lat * 4e4 * 1e6:.0f} us per step for all 40,000 wheels",
+        )
+    )
+    return rows, numbers
+
+
+def _gpu_visible() -> bool:
+    """Whether JAX, with its default platform, finds a GPU (checked in a child process,
+    since this one is restricted to the CPU)."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_PLATFORMS"}
+    code = "import jax; print(jax.default_backend())"
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    return out.returncode == 0 and out.stdout.strip().endswith(("gpu", "cuda", "rocm"))
+
+
+def _run_gpu_child(quick):
+    """The GPU rows and the GPU's name, from `run.py --gpu-child` (default platform)."""
+    env = {k: v for k, v in os.environ.items() if k != "JAX_PLATFORMS"}
+    cmd = [sys.executable, __file__, "--gpu-child"] + (["--quick"] if quick else [])
+    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    return [tuple(r) for r in result["rows"]], result["numbers"], result["machine"]
+
+
 def machine() -> str:
     cpu = platform.processor() or platform.machine()
     try:
@@ -243,7 +338,23 @@ def main(argv=None):
     parser.add_argument("--quick", action="store_true", help="smaller sizes")
     parser.add_argument("--no-readme", action="store_true", help="do not update README.md")
     parser.add_argument("--json", type=pathlib.Path, help="also write the numbers as JSON")
+    parser.add_argument(
+        "--device",
+        choices=("auto", "cpu", "gpu"),
+        default="auto",
+        help="cpu: the CPU table only; gpu: also the GPU rows (an error without a GPU);"
+        " auto (default): the GPU rows where JAX finds a GPU",
+    )
+    parser.add_argument("--gpu-child", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
+    if args.gpu_child:  # the GPU rows, as one JSON line on stdout
+        rows, numbers = gpu_rows(args.quick)
+        print(json.dumps(dict(rows=rows, numbers=numbers, machine=machine())))
+        return 0
+    use_gpu = args.device == "gpu" or (args.device == "auto" and _gpu_visible())
+    if args.device == "gpu" and not _gpu_visible():
+        print("benchmarks/run.py: --device gpu: JAX finds no GPU here", file=sys.stderr)
+        return 2
     console = Console()
     sizes = [1, 10, 100, 1_000, 10_000, 100_000] + ([] if args.quick else [1_000_000])
     rows, numbers = [], {}
@@ -269,13 +380,14 @@ def main(argv=None):
             numbers[f"throughput_{n}"] = rate
             add(f"solve_wheel, batch {n:,}", f"{rate:,.0f} /s", f"{t * 1e3:.2f} ms per call")
             progress.advance(task)
-        one, both = two_cores(sizes[-1], repeats=2 if args.quick else 3)
-        numbers.update(two_core_ratio=both / one)
+        one, plain, pair = two_cores(sizes[-1], repeats=2 if args.quick else 3)
+        numbers.update(two_core_ratio=pair / one, one_process_ratio=plain / one)
         add(
-            f"2 host CPU devices / 1, batch {sizes[-1]:,}",
-            f"{both / one:.2f}x",
-            f"one device {one:,.0f} /s, both {both:,.0f} /s (target >= 1.7x; a slice per"
-            " device, fresh process with --xla_force_host_platform_device_count=2)",
+            f"2 cores / 1 core, batch {sizes[-1]:,}",
+            f"{pair / one:.2f}x",
+            f"one pinned core {one:,.0f} /s; two processes pinned to a core each (sweep's"
+            f" workers) {pair:,.0f} /s (target >= 1.7x); one unpinned process"
+            f" {plain:,.0f} /s = {plain / one:.2f}x",
         )
         balance = sj.contact_forces(WHEEL, SNOW, st.entry_angle, inputs(sizes[-1])[1]).vertical_load
         numbers["max_load_balance_error"] = float(
@@ -375,9 +487,13 @@ def main(argv=None):
             numbers[f"compile_{shear}"] = c
             add(f"first-call compile, {shear}", f"{c:.2f} s", "fresh process, batch of 1,000")
         progress.advance(task)
-        lat = in_step_latency(200 if args.quick else 1000)
+        lat = in_step_latency_pinned(200 if args.quick else 1000)
         numbers["in_step_us_per_wheel"] = lat * 1e6
-        add("in-step latency (4 wheels, lax.scan, warm start)", f"{lat * 1e6:.1f} us per wheel", "")
+        add(
+            "in-step latency (4 wheels, lax.scan, warm start)",
+            f"{lat * 1e6:.1f} us per wheel",
+            "fresh process pinned to one core (target <= 5 us)",
+        )
         sim = simulation_step_cost(200 if args.quick else 1000)
         numbers["simulation_us_per_wheel_step"] = sim * 1e6
         add(
@@ -397,6 +513,12 @@ def main(argv=None):
         )
         progress.advance(task)
 
+    gpu_where = None
+    if use_gpu:
+        console.print("measuring the GPU rows (a child process) ...")
+        gpu, gpu_numbers, gpu_where = _run_gpu_child(args.quick)
+        rows += gpu
+        numbers.update(gpu_numbers)
     table = Table(title="snowjax benchmarks")
     for col in ("what", "result", "notes"):
         table.add_column(col)
@@ -405,10 +527,21 @@ def main(argv=None):
     console.print(table)
     where = machine()
     console.print(f"machine: {where}")
+    if gpu_where is not None:
+        console.print(f"GPU rows: {gpu_where}")
     markdown = "\n".join(
         [
             f"Measured on: {where} ({time.strftime('%Y-%m-%d')}).",
             "",
+            *(
+                ["GPU rows (`GPU ...`) measured on: " + gpu_where + ".", ""]
+                if gpu_where is not None
+                else [
+                    "No GPU was available for this run (`--device gpu` measures the GPU rows"
+                    " where JAX finds one).",
+                    "",
+                ]
+            ),
             "| what | result | notes |",
             "|---|---|---|",
         ]

@@ -374,6 +374,28 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
     _assert_rows_equal(sj.load_sweep(out), reference[1])
 
 
+def test_worker_processes_write_the_same_rows(reference, tmp_path):
+    # Three local workers (this process and two pinned children) deal the 3 chunks.
+    out = tmp_path / "w"
+    result = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False, workers=3)
+    assert result.complete and result.computed_chunks == 3 and result.skipped_chunks == 0
+    assert result.files and not list(out.glob(".chunk_*"))  # no temporary files left
+    _assert_rows_equal(sj.load_sweep(out), reference[1])
+    # A resume finds everything on disk and starts no worker.
+    again = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False, workers=3)
+    assert again.complete and again.computed_chunks == 0 and again.skipped_chunks == 3
+    # The default uses workers only for long CPU sweeps.
+    d = _definition()
+    assert d.n_points < _sweep.AUTO_WORKERS_POINTS
+    assert _sweep._default_workers(d, [WHEEL, SNOW], (LOADS, SLIPS), (None,) * 4) == 1
+    with pytest.raises(ValueError, match="workers must be >= 1"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "x", chunk_size=C, workers=0)
+    with pytest.raises(ValueError, match="excludes devices"):
+        sj.sweep(
+            WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "x", workers=2, callback=lambda k, p: None
+        )
+
+
 def test_bad_inputs_raise_clear_errors(tmp_path):
     out = tmp_path / "s"
     cases = [

@@ -147,6 +147,13 @@ def register(sub) -> None:
     p.add_argument("--max-steps", type=int, default=64, help="Newton iteration limit")
     p.add_argument("--float32", action="store_true", help="solve in float32 (default float64)")
     p.add_argument("--restart", action="store_true", help="discard a sweep already in --out")
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="processes sharing the chunks, each pinned to its own CPU core (default: one"
+        " per core from 1,000,000 points on, else 1)",
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     p.add_argument(
         "--distributed",
@@ -393,6 +400,10 @@ def _unused_options(args) -> None:
     if cluster and not args.distributed:
         verb = "applies" if len(cluster) == 1 else "apply"
         raise ValueError(f"{', '.join(cluster)} only {verb} with --distributed")
+    if args.workers is not None and args.distributed:
+        raise ValueError(
+            "--workers does not apply with --distributed (its processes share the chunks)"
+        )
 
 
 def run(args) -> int:
@@ -433,6 +444,7 @@ def run(args) -> int:
             formats=formats,
             nodes_per_panel=args.nodes_per_panel,
             max_steps=args.max_steps,
+            workers=args.workers,
         )
     except ValueError as err:
         message = str(err).removeprefix("sweep: ")
@@ -443,6 +455,10 @@ def run(args) -> int:
             f"snowjax sweep: error: {err}; fix it and run the same command again to resume",
             file=sys.stderr,
         )
+        return 1
+    except RuntimeError as err:  # a worker process failed; its chunks so far are kept
+        message = str(err).removeprefix("sweep: ")
+        print(f"snowjax sweep: error: {message}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:
         print(

@@ -4,10 +4,9 @@
 `ReeceSoil`, `LayeredSnow`) and of the Wong–Reece stress distribution to measured
 sinkage and/or drawbar pull / motion resistance versus slip at one or more loads,
 straight through the vmapped wheel equilibrium `solve_wheel` (eq. 4.14); its gradients
-come from the implicit function theorem (`optimistix.ImplicitAdjoint`), not from
-unrolled iterations.  `fit_parameter_names` lists the names a terrain and distribution
-offer; parameters that are never negative are fitted in log space
-(`LOG_SPACE_PARAMETERS`), the others linearly.
+come from the implicit function theorem at the root, not from unrolled iterations.
+`fit_parameter_names` lists the names a terrain and distribution offer; parameters that
+are never negative are fitted in log space (`LOG_SPACE_PARAMETERS`), the others linearly.
 
 Equation numbers refer to Sankapalli (2004), *Predictive semi-empirical analysis for
 tire/snow interaction*, MSc thesis, University of Alaska Fairbanks.

@@ -18,11 +18,15 @@ list (zipped arrays) of loads x slips x parameter sets, in chunks of a fixed siz
   a restart with a different definition refuses with a `ValueError`.
 - **Sharded.**  The rows of a chunk are split over the local JAX devices, each device
   solving its slice as its own program (dispatched asynchronously, so the devices run
-  concurrently; on a CPU, `XLA_FLAGS=--xla_force_host_platform_device_count=N` set
-  before JAX starts makes N host devices, one per core; each compiles its own program,
-  about 5 s on a CPU, so this pays only for long sweeps); with several
+  concurrently; on a CPU, forced host devices gain nothing: use `workers`); with several
   processes (`jax.distributed.initialize`) chunk k is computed by process
   `k % process_count`, so the processes write disjoint chunks into a shared directory.
+- **Both CPU cores.**  XLA:CPU solves one batch on about 1.4 of a machine's cores; a
+  sweep on the CPU therefore runs `workers` processes, each pinned to its own core and
+  computing chunks `k % workers` (the split above, run locally): on 2 cores the solve
+  runs at 2.0x the throughput of one pinned core against 1.4x for one process
+  (`benchmarks/run.py`).  Each worker compiles its own solve, so by default only sweeps
+  of at least `AUTO_WORKERS_POINTS` points use them.
 - **Outputs.**  Once every chunk is on disk the chunks are concatenated, streaming one
   chunk at a time, into `sweep.csv` and/or `sweep.npz` (one `.npy` member per column,
   written column by column, so consolidation needs the memory of one chunk too).  The
@@ -123,8 +127,9 @@ class _Solver:
                 # A slice per device, each its own program, not one program sharded over
                 # a mesh: the batch-wide convergence test of the Newton loop would then
                 # synchronise the devices every iteration (two host CPU devices, batch
-                # 1e5: the sharded solve measured 0.8x one device's throughput, this
-                # 1.6x; at batch 1e6 `benchmarks/run.py` measures 0.97x, not understood).
+                # 1e5: the sharded solve measured 0.8x one device's throughput).  On a
+                # CPU, two host devices gain nothing over one device, which already
+                # uses about 1.4 cores (XLA:CPU's threads); `workers` uses both.
                 x = {
                     f: jax.device_put(v[j * size : (j + 1) * size], device)
                     for f, v in columns.items()
@@ -151,6 +156,113 @@ class _Solver:
             value = np.concatenate([np.asarray(getattr(state, name)) for state in states])
             out[name] = value[:n].astype(self.d.columns[name])
         return k, {name: out[name] for name in self.d.columns}
+
+
+# ---------------------------------------------------------------------------------------
+# Worker processes (both CPU cores)
+# ---------------------------------------------------------------------------------------
+
+# Sweeps with at least this many points use one worker process per available CPU core by
+# default.  A worker first imports snowjax and compiles (about 7 s), so they pay off only
+# for long sweeps: on 2 cores, 2e6 points took 13.0 s with 2 workers against 13.6 s with
+# one process (4e5 points: 7.0 s against 6.1 s; 6e6: 29.4 s against 33.1 s).
+AUTO_WORKERS_POINTS = 2_000_000
+
+
+def _cores() -> list[int]:
+    """CPU cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return sorted(os.sched_getaffinity(0))
+    return list(range(os.cpu_count() or 1))
+
+
+def _pin(core: int | None) -> None:
+    """Pin this process to one core (where the OS allows it)."""
+    if core is not None and hasattr(os, "sched_setaffinity"):
+        os.sched_setaffinity(0, {core})
+
+
+def _default_workers(d: _Definition, objects, inputs, custom) -> int:
+    """One worker per core for a long CPU sweep of snowjax's own types (which the workers
+    can unpickle) whose inputs are small to pickle (a grid, or lists below 256 MiB); else 1.
+    """
+    import jax
+
+    if any(x is not None for x in custom) or jax.default_backend() != "cpu":
+        return 1
+    if jax.process_count() > 1:  # jax.distributed: the processes already share the chunks
+        return 1
+    if d.n_points < AUTO_WORKERS_POINTS or len(_cores()) < 2:
+        return 1
+    if not all(type(x).__module__.startswith("snowjax.") for x in objects if x is not None):
+        return 1
+    if sum(np.asarray(x).nbytes for x in inputs) > 2**28:
+        return 1
+    return min(len(_cores()), d.n_chunks)
+
+
+def _worker(args_path: str, x64: bool) -> None:
+    """Entry point of a worker process: `python -c` calls it with its pickled arguments
+    and the parent's float64 setting (applied before the arrays are unpickled)."""
+    import pickle
+
+    import jax
+
+    jax.config.update("jax_enable_x64", x64)
+    with open(args_path, "rb") as f:
+        job = pickle.load(f)
+    _pin(job.pop("core"))
+    sweep(*job.pop("args"), **job)
+
+
+def _start_workers(args, kwargs, count, cores):
+    """Start workers 1..count-1 (the caller is worker 0); returns [(process, log, job)]."""
+    import pickle
+    import subprocess
+    import sys
+    import tempfile
+
+    import jax
+
+    started = []
+    for index in range(1, count):
+        job = dict(
+            kwargs,
+            args=args,
+            process_index=index,
+            process_count=count,
+            workers=1,
+            progress=False,
+            resume=True,
+            formats=(),
+            core=cores[index] if len(cores) >= count else None,
+        )
+        with tempfile.NamedTemporaryFile("wb", suffix=".pkl", delete=False) as f:
+            pickle.dump(job, f)
+        log = tempfile.TemporaryFile("w+")  # the worker's output, shown if it fails
+        x64 = bool(jax.config.read("jax_enable_x64"))
+        code = f"from snowjax._sweep.sweep import _worker; _worker({f.name!r}, {x64})"
+        proc = subprocess.Popen([sys.executable, "-c", code], stdout=log, stderr=log)
+        started.append((proc, log, pathlib.Path(f.name)))
+    return started
+
+
+def _join_workers(started, stop: bool = False) -> None:
+    """Wait for the workers (terminating them first with `stop`); without `stop`, a
+    failed one raises `RuntimeError` with the end of its output."""
+    failures = []
+    for proc, log, job in started:
+        if stop:
+            proc.terminate()
+        code = proc.wait()
+        log.seek(0)
+        text = log.read()
+        log.close()
+        job.unlink(missing_ok=True)
+        if code != 0:
+            failures.append(f"a worker process exited with {code}: ...{text.strip()[-2000:]}")
+    if failures and not stop:
+        raise RuntimeError("sweep: " + "\n".join(failures))
 
 
 # ---------------------------------------------------------------------------------------
@@ -248,6 +360,7 @@ def sweep(
     process_index: int | None = None,
     process_count: int | None = None,
     callback: Callable[[int, pathlib.Path], None] | None = None,
+    workers: int | None = None,
 ) -> SweepResult:
     """Sweep the wheel equilibrium (4.14) over loads x slips x parameter sets, to disk.
 
@@ -296,6 +409,13 @@ def sweep(
       `k % process_count`; the process that finds every chunk on disk when it
       finishes writes the consolidated outputs.
     - `callback`: called as `callback(k, path)` after chunk k is safely on disk.
+    - `workers`: processes that share the chunks on this machine (chunk k by worker
+      `k % workers`), each pinned to its own CPU core; this process is worker 0 and
+      writes the outputs once all are done.  Default `None`: one per available core
+      when the sweep runs on the CPU, has at least `AUTO_WORKERS_POINTS` (10^6) points
+      and none of `devices`, `process_index`, `process_count` and `callback` is given;
+      else 1.  `workers > 1` excludes those four.  The arguments are pickled to the
+      workers, so a terrain or distribution class of your own must be importable.
 
     **Returns:** `SweepResult`.  Rows are read back with `load_sweep` or
     `iter_sweep_chunks`.
@@ -328,6 +448,24 @@ def sweep(
         raise ValueError(
             f"sweep: need 0 <= process_index < process_count, got {p_index}, {p_count}"
         )
+    custom = (devices, process_index, process_count, callback)
+    if workers is None:
+        objects = [
+            x
+            for tree in (wheel, snow, distribution)
+            for x in (tree if isinstance(tree, (list, tuple)) else [tree])
+        ]
+        n_workers = _default_workers(d, objects, (loads, slips), custom)
+    else:
+        n_workers = int(workers)
+    if n_workers < 1:
+        raise ValueError(f"sweep: workers must be >= 1, got {workers}")
+    if n_workers > 1 and any(x is not None for x in custom):
+        raise ValueError(
+            "sweep: workers > 1 excludes devices, process_index, process_count and callback"
+        )
+    if n_workers > 1:
+        p_index, p_count = 0, n_workers
     devices = list(jax.local_devices() if devices is None else devices)
     if not devices:
         raise ValueError("sweep: devices is empty")
@@ -364,25 +502,48 @@ def sweep(
         )
     todo = [k for k in mine if k not in done]
 
-    computed_points, solve_time = 0, 0.0
-    if todo:
-        solver = _Solver(d, devices)
-        with _progress_bar(progress, len(mine), len(done)) as bar:
-            t0 = time.perf_counter()
-            pending = solver.submit(todo[0])
-            for i, k in enumerate(todo):
-                # Dispatch chunk i + 1 before waiting for chunk i: solving overlaps writing.
-                nxt = solver.submit(todo[i + 1]) if i + 1 < len(todo) else None
-                k, rows = solver.result(pending)
-                path = out / _chunk_name(k)
-                with _atomic(path, tag) as f:
-                    np.savez(f, **rows)  # pyright: ignore[reportArgumentType]  (column arrays only)
-                computed_points += rows["index"].size
-                solve_time = time.perf_counter() - t0
-                bar(computed_points / solve_time)
-                if callback is not None:
-                    callback(k, path)
-                pending = nxt
+    started, affinity = [], None
+    # Workers 1..n-1 run in processes of their own (this process is worker 0); their
+    # chunks still to compute (missing or damaged now) count as computed here.
+    theirs = [
+        k
+        for k in range(d.n_chunks)
+        if n_workers > 1 and _owner(k, n_workers) != 0 and not _chunk_ok(out / _chunk_name(k), d, k)
+    ]
+    todo += theirs
+    if theirs:
+        kwargs = dict(
+            shear=shear,
+            distribution=distribution,
+            out=out,
+            chunk_size=chunk_size,
+            grid=grid,
+            nodes_per_panel=nodes_per_panel,
+            max_steps=max_steps,
+        )
+        cores = _cores()
+        started = _start_workers((wheel, snow, loads, slips), kwargs, n_workers, cores)
+        if len(cores) >= n_workers and hasattr(os, "sched_setaffinity"):
+            affinity = os.sched_getaffinity(0)
+            _pin(cores[0])
+    computed_points = sum(min(d.chunk_size, d.n_points - k * d.chunk_size) for k in todo)
+    solve_time = 0.0
+    try:
+        if todo:
+            on_disk = d.n_chunks - len(todo) if started else len(done)
+            total = d.n_chunks if started else len(mine)
+            solve_time = _compute(
+                d, devices, out, todo, total, on_disk, progress, tag, callback, started
+            )
+    except BaseException:  # e.g. KeyboardInterrupt: stop the workers too
+        _join_workers(started, stop=True)
+        raise
+    finally:
+        if affinity is not None:
+            os.sched_setaffinity(0, affinity)
+    _join_workers(started)
+    if n_workers > 1:  # every chunk is this sweep's now
+        p_index, p_count = 0, 1
 
     # Everything on disk?  (Chunks of other processes are checked as they are now.)
     others = [k for k in range(d.n_chunks) if _owner(k, p_count) != p_index]
@@ -405,10 +566,47 @@ def sweep(
     )
 
 
+def _compute(d, devices, out, todo, total, on_disk, progress, tag, callback, workers):
+    """Solve and write this process's chunks of `todo` (all of them without `workers`),
+    then, with workers, wait for them, the bar counting every chunk file written;
+    returns the seconds taken."""
+    solver = _Solver(d, devices)
+    mine = [k for k in todo if not workers or _owner(k, len(workers) + 1) == 0]
+    t0 = time.perf_counter()
+    points = 0
+
+    def count() -> int:  # chunks on disk (workers write theirs meanwhile)
+        return on_disk + sum((out / _chunk_name(k)).exists() for k in todo)
+
+    with _progress_bar(progress, total, on_disk) as bar:
+        pending = solver.submit(mine[0]) if mine else None
+        for i, k in enumerate(mine):
+            # Dispatch chunk i + 1 before waiting for chunk i: solving overlaps writing.
+            nxt = solver.submit(mine[i + 1]) if i + 1 < len(mine) else None
+            k, rows = solver.result(pending)
+            path = out / _chunk_name(k)
+            with _atomic(path, tag) as f:
+                np.savez(f, **rows)  # pyright: ignore[reportArgumentType]  (column arrays only)
+            points += rows["index"].size
+            done = count() if workers else None
+            rate = (points if done is None else (done - on_disk) * d.chunk_size) / (
+                time.perf_counter() - t0
+            )
+            bar(rate, done)
+            if callback is not None:
+                callback(k, path)
+            pending = nxt
+        while workers and any(proc.poll() is None for proc, _, _ in workers):
+            time.sleep(0.2)
+            done = count()
+            bar((done - on_disk) * d.chunk_size / (time.perf_counter() - t0), done)
+    return time.perf_counter() - t0
+
+
 @contextlib.contextmanager
 def _progress_bar(show: bool, total: int, done: int):
     if not show:
-        yield lambda rate: None
+        yield lambda rate, completed=None: None
         return
     from rich.progress import (
         BarColumn,
@@ -430,8 +628,13 @@ def _progress_bar(show: bool, total: int, done: int):
     ) as prog:
         task = prog.add_task("sweep", total=total, completed=done, rate="")
 
-        def advance(rate: float) -> None:
-            prog.update(task, advance=1, rate=f"{rate:,.0f} points/s")
+        def advance(rate: float, completed: int | None = None) -> None:
+            """One more chunk done, or `completed` chunks done in all."""
+            text = f"{rate:,.0f} points/s"
+            if completed is None:
+                prog.update(task, advance=1, rate=text)
+            else:
+                prog.update(task, completed=completed, rate=text)
 
         yield advance
 

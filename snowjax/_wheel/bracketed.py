@@ -98,8 +98,9 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
     A batched iteration runs until its slowest element converges, so one straggler
     would make every element of the batch pay for its extra Newton steps.  All elements
     take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered,
-    solved on their own from where they stopped, and scattered back.  Gradients come
-    from each `optx.root_find`'s implicit adjoint, as for a single solve.
+    solved on their own from where they stopped, and scattered back.  Gradients w.r.t.
+    `params` come from each `optx.root_find`'s implicit adjoint, as for a single solve
+    (`solve_wheel` passes stopped parameters and differentiates at the root instead).
 
     **Arguments:** `residual(y, params) -> f` elementwise, `y0`, `lower`, `upper` (1-D,
     bracketing a sign change, `f(lower) > 0 > f(upper)`), `params` (a pytree of arrays with

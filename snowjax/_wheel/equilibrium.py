@@ -12,8 +12,11 @@ s >= s_min = 1e-6 keeps every iterate strictly inside the snow layer (theta_cap 
 >= 1e-12 theta_cap), where the residual and its derivative are finite.
 
 Gradients with respect to every parameter leaf, the load and the slip come from the
-implicit function theorem (`optimistix.ImplicitAdjoint`, the default), not from
-unrolling the Newton iterations.
+implicit function theorem at the root (`_root_outputs`, a custom JVP rule), not from
+unrolling the Newton iterations: the root finder runs on stopped inputs, and one
+linearisation of the output quadrature at the root gives dtheta0 and the forces' total
+derivatives together (one tangent pass along the solver variable, one along the
+parameters; `jax.grad` transposes the latter).
 """
 
 from __future__ import annotations
@@ -200,6 +203,85 @@ def _warm_start(guess, theta_cap):
     return jax.lax.stop_gradient(jnp.clip(s, s_min, S_MAX))
 
 
+def _entry_angle_cap(depth, diameter):
+    """(theta_cap, reaches_base): the largest admissible entry angle [rad], the base's
+    arccos(1 - 2 depth / D) capped at 85 degrees, and whether the base lies within it.
+
+    The base angle is pi for a layer deeper than the wheel and for an infinitely deep
+    terrain; `where` keeps gradients finite there (arccos' is infinite at -1, and
+    reverse mode would otherwise form 0 * inf w.r.t. the diameter).
+    """
+    finite = jnp.isfinite(depth)
+    cos_base = jnp.where(finite, 1 - 2 * jnp.where(finite, depth, 0.0) / diameter, -jnp.inf)
+    inside = cos_base > -1
+    theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
+    return jnp.minimum(theta_base, MAX_ENTRY_ANGLE), theta_base <= MAX_ENTRY_ANGLE
+
+
+def _partials_at_root(s, masks, target, params, t_target, t_params, forces):
+    """`forces` and its total tangent at the root s of W(theta0(s)) = target.
+
+    With W_s and W_p the partial derivatives at the root, the implicit function theorem
+    gives ds = (d target - W_p dp) / W_s, and every output moves by its partials along
+    (ds, dp).  One tangent pass along s and one along the parameters that carry a tangent
+    (the others stay symbolic zeros) serve W and every other output together.  Elements
+    whose theta0 is held at the cap (not a root; `forces` ignores s there) have W_s = 0
+    and take ds = 0.  Returns (outputs, their tangents, ds).
+    """
+    moving = jax.tree_util.tree_map(lambda t: t is not None, t_params, is_leaf=lambda t: t is None)
+    free, fixed = eqx.partition(params, moving)
+    t_free, _ = eqx.partition(t_params, moving, is_leaf=lambda t: t is None)
+    out, along_s = jax.jvp(lambda s: forces(s, masks, params), (s,), (jnp.ones_like(s),))
+    _, along_p = jax.jvp(
+        lambda free: forces(s, masks, eqx.combine(free, fixed)), (free,), (t_free,)
+    )
+    w_s, w_p = along_s[1], along_p[1]
+    d_target = jnp.zeros_like(w_p) if t_target is None else t_target
+    moves = w_s != 0
+    ds = jnp.where(moves, (d_target - w_p) / jnp.where(moves, w_s, 1.0), 0.0)
+    tangents = jax.tree_util.tree_map(lambda dp, dsv: dp + dsv * ds, along_p, along_s)
+    return out, tangents, ds
+
+
+@eqx.filter_custom_jvp
+def _implicit_root(s, masks, target, params, *, forces):
+    """The root s itself (computed without derivatives), carrying the implicit function
+    theorem's ds for the second derivatives of `_root_outputs` (its own rule ignores the
+    tangent of s; unused at first order, the computation is dropped by XLA)."""
+    del masks, target, params, forces
+    return s
+
+
+@_implicit_root.def_jvp
+def _implicit_root_jvp(primals, tangents, *, forces):
+    s, masks, target, params = primals
+    _, _, t_target, t_params = tangents
+    _, _, ds = _partials_at_root(s, masks, target, params, t_target, t_params, forces)
+    return _implicit_root(s, masks, target, params, forces=forces), ds
+
+
+@eqx.filter_custom_jvp
+def _root_outputs(s, masks, target, params, *, forces):
+    """`forces(s, masks, params)` -> (theta0, W, ...) at the root s of W(theta0(s)) = target.
+
+    Pass s as `_implicit_root(stopped s, ...)`.  The rule (`_partials_at_root`) supplies
+    the implicit function theorem's derivative, so a first derivative costs one tangent
+    (or, under `jax.grad`, one transposed tangent) of the output quadrature along the
+    parameters and one along s, and nothing of the Newton iteration.  Differentiating the
+    rule again (second derivatives) follows s's own implicit tangent.
+    """
+    del target
+    return forces(s, masks, params)
+
+
+@_root_outputs.def_jvp
+def _root_outputs_jvp(primals, tangents, *, forces):
+    s, masks, target, params = primals
+    _, _, t_target, t_params = tangents  # the tangent of s is part of the rule's own
+    out, t_out, _ = _partials_at_root(s, masks, target, params, t_target, t_params, forces)
+    return out, t_out
+
+
 def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     """Solve a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
@@ -207,16 +289,14 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     elements are independent), so a Newton step is one tangent evaluation, and the
     batch-wide capacity check is a `lax.cond` that costs nothing when not needed.
     """
+    # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
+    # the solve runs on stopped copies of the inputs.
+    differentiable = (wheel, snow, load, slip)
+    wheel, snow, load, slip = jax.lax.stop_gradient(differentiable)
     dtype = load.dtype
     tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
-    # arccos(1 - 2 z_w / D), pi when the layer is deeper than the wheel; `where` keeps the
-    # gradient finite there (arccos' is infinite at -1).
-    cos_base = 1 - 2 * snow.z_w / diameter
-    inside = cos_base > -1
-    theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
-    theta_cap = jnp.minimum(theta_base, MAX_ENTRY_ANGLE)
-    reaches_base = theta_base <= MAX_ENTRY_ANGLE
+    theta_cap, reaches_base = _entry_angle_cap(snow.z_w, diameter)
     n_nodes = n[braking]
 
     def w_batch(theta0, i, d, b, sn) -> Array:  # W of every element, explicit parameters
@@ -228,11 +308,14 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     def vertical_load(theta0) -> Array:
         return w_batch(theta0, slip, diameter, width, snow)
 
-    def all_forces(theta0, bottomed):
+    def forces(s, masks, params):  # (theta0, W, R, T, M) at s, explicit parameters
+        over, bottomed = masks
+        th_cap, i, d, b, sn = params
+        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
         fn = lambda th, i, d, b, sn, bt: _contact_scalar(  # noqa: E731
             th, i, d, b, sn, shear, n_nodes, bt, braking
         )
-        return jax.vmap(fn)(theta0, slip, diameter, width, snow, bottomed)
+        return (theta0, *jax.vmap(fn)(theta0, i, d, b, sn, bottomed))
 
     # Capacity of the layer, W at s_min.  For slip >= 0 the shear stress only adds to W,
     # so loads below the closed-form no-shear capacity are known to be carried and the
@@ -284,8 +367,16 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
         tol,
         max_steps,
     )
-    theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
-    w, r, t, m = all_forces(theta0, over & reaches_base)
+    # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
+    # held at the cap do not enter their outputs).
+    wheel, snow, load, slip = differentiable
+    root = (
+        (over, over & reaches_base),
+        load,
+        (_entry_angle_cap(snow.z_w, wheel.diameter)[0], slip, wheel.diameter, wheel.width, snow),
+    )
+    s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
+    theta0, w, r, t, m = _root_outputs(s, *root, forces=forces)
     balanced = jnp.abs(w / target - 1) <= 10 * tol  # 1e-8 in float64
     status = jnp.where(
         over,
@@ -328,22 +419,25 @@ def _flush_tiny_slip(slip):
     return slip + jax.lax.stop_gradient(flushed - slip)
 
 
-# Elements solved together in one Newton iteration.  Chunks keep the quadrature's
-# (chunk, nodes) intermediates in cache and let each chunk stop iterating on its own.
+# Elements solved together in one Newton iteration.  On a CPU, chunks keep the
+# quadrature's (chunk, nodes) intermediates in cache and let each chunk stop iterating on
+# its own; an accelerator needs wide chunks to fill it (1 GB of intermediates in float64).
 CHUNK_SIZE = 2048
+ACCELERATOR_CHUNK_SIZE = 65536
 
 
 def _in_chunks(fn, args, size):
     """`fn(args)` on 1-D leaves of length `size`, as `lax.map` over fixed-size chunks."""
-    if size <= CHUNK_SIZE:
+    chunk = CHUNK_SIZE if jax.default_backend() == "cpu" else ACCELERATOR_CHUNK_SIZE
+    if size <= chunk:
         return fn(args)
-    n_chunks = -(-size // CHUNK_SIZE)
-    pad = n_chunks * CHUNK_SIZE - size
+    n_chunks = -(-size // chunk)
+    pad = n_chunks * chunk - size
 
     def split(x):
         # Pad by repeating the last element (a valid input), then cut into chunks.
         x = jnp.concatenate([x, jnp.broadcast_to(x[-1:], (pad,))]) if pad else x
-        return x.reshape(n_chunks, CHUNK_SIZE)
+        return x.reshape(n_chunks, chunk)
 
     out = jax.lax.map(fn, jax.tree_util.tree_map(split, args))
     return jax.tree_util.tree_map(lambda x: x.reshape(-1)[:size], out)
@@ -413,18 +507,13 @@ def _solve_general_layout(
     `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`); the
     lateral force and aligning torque are returned as zeros without it.
     """
+    # As in `_solve_layout`: the solve runs on stopped copies, `_root_outputs` differentiates.
+    differentiable = (wheel, terrain, distribution, load, slip, side)
+    wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
     dtype = load.dtype
     tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
-    # -inf for an infinitely deep terrain; written with `where` so that reverse-mode
-    # gradients w.r.t. the diameter are not 0 * inf = NaN there.
-    finite = jnp.isfinite(terrain.depth)
-    depth = jnp.where(finite, terrain.depth, 0.0)
-    cos_base = jnp.where(finite, 1 - 2 * depth / diameter, -jnp.inf)
-    inside = cos_base > -1
-    theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
-    theta_cap = jnp.minimum(theta_base, MAX_ENTRY_ANGLE)
-    reaches_base = theta_base <= MAX_ENTRY_ANGLE
+    theta_cap, reaches_base = _entry_angle_cap(terrain.depth, diameter)
     fractions = None if distribution is None else distribution.angle_fractions(slip)
 
     def contact_batch(theta0, vertical_only, i, d, b, tr, fr, sd):  # explicit parameters
@@ -447,7 +536,6 @@ def _solve_general_layout(
         w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
             jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
         )
-        w_grid = jax.lax.stop_gradient(w_grid)
         over = ~jnp.any(w_grid >= load, axis=0)
         target = jnp.where(over, 0.5 * w_grid[0], load)
         carried = w_grid >= target
@@ -463,7 +551,7 @@ def _solve_general_layout(
         frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
         s0 = jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
     else:
-        w_top = jax.lax.stop_gradient(vertical(_theta_from_s(s_min, theta_cap)))
+        w_top = vertical(_theta_from_s(s_min, theta_cap))
         over = w_top < load
         target = jnp.where(over, 0.5 * w_top, load)
         lower, upper = s_min, s_max
@@ -483,10 +571,20 @@ def _solve_general_layout(
         tol,
         max_steps,
     )
-    theta0 = jnp.where(over, theta_cap, _theta_from_s(s, theta_cap))
-    forces = cast(tuple, contact(theta0, False))
-    w, r, t, m = forces[:4]
-    fy, mz = forces[4:] if side is not None else (jnp.zeros_like(m), jnp.zeros_like(m))
+
+    def forces(s, masks, params):  # (theta0, W, R, T, M[, F_y, M_z]) at s
+        (over,) = masks
+        th_cap, *element = params
+        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
+        return (theta0, *cast(tuple, contact_batch(theta0, False, *element)))
+
+    wheel, terrain, distribution, load, slip, side = differentiable
+    fractions = None if distribution is None else distribution.angle_fractions(slip)
+    theta_cap = _entry_angle_cap(terrain.depth, wheel.diameter)[0]
+    root = ((over,), load, (theta_cap, slip, wheel.diameter, wheel.width, terrain, fractions, side))
+    s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
+    theta0, w, r, t, m, *lateral = _root_outputs(s, *root, forces=forces)
+    fy, mz = lateral if side is not None else (jnp.zeros_like(m), jnp.zeros_like(m))
     balanced = jnp.abs(w / target - 1) <= 10 * tol
     status = jnp.where(
         over,
@@ -600,7 +698,8 @@ def solve_wheel(
     against each other with NumPy rules; every field of the result has the broadcast
     shape.  One call therefore sweeps slips x loads x parameter sets.  Works under
     `jax.jit`, `jax.vmap` and `jax.grad`; gradients w.r.t. every leaf, the load and the
-    slip come from the implicit function theorem.
+    slip come from the implicit function theorem (second derivatives too: the rule at
+    the root is itself differentiable).
 
     **Arguments:**
 
