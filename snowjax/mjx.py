@@ -56,11 +56,13 @@ with any MJX settings and is the cheap choice for a few parameters (snow, contro
 Reverse mode (`jax.grad`) works too, but MJX only allows it with `opt.iterations = 1` (its
 constraint solver is a `while_loop` otherwise); the shipped model uses up to 20 Newton
 iterations because with one the contact solve is too inexact for it (measured: from
-rest the chassis jumps by 0.3 m), so differentiate it in forward mode.  Measured against
-central differences: the distance after 40 steps from rest with `load="contact"`, 8e-5
-(d/dp_w) and 3e-5 (d/dtan phi) relative; from 1 m/s with `load="contact"` d/dp_w differs
-by 0.6 % (d/dtan phi 6e-6), not reduced by a 1e-14 solver tolerance, cause not found;
-with the static loads 3e-4.  Reverse mode at `iterations = 1`: 1e-3.
+rest the chassis jumps by 0.3 m), so differentiate it in forward mode. Measured against
+central differences: the distance after 40 steps from rest with `load="contact"`, 2e-6
+(d/dp_w) and 4e-5 (d/dtan phi) relative; from 1 m/s with `load="contact"`, 2e-7 and
+1e-6. (The derivative of the implicit spin update is a second derivative of the
+equilibrium; until the quadrature rule moved with the entry angle it lacked a Leibniz
+term, and d/dp_w from 1 m/s was 0.6 % off.) With the static loads 3e-4 (measured before
+that fix). Reverse mode at `iterations = 1`: 1e-3.
 
 **Load transfer, measured.**  With `load="contact"` the shipped vehicle driven by 540 N m
 per wheel from 1 m/s carries, after 0.2 s, 2,995 N on each front and 4,004 N on each rear

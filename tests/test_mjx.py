@@ -138,7 +138,7 @@ def test_contact_loads_carry_the_weight(short_rollout):
 
 
 def test_gradient_from_rest_matches_central_differences(short_rollout):
-    """Through 40 MJX steps from rest with contact loads (measured: 8e-5 and 3e-5)."""
+    """Through 40 MJX steps from rest with contact loads (measured: 2e-6 and 4e-5)."""
     x = jnp.array([SNOW.p_w, SNOW.tan_phi])
     _, g, _ = short_rollout(x)
     g = np.asarray(g)

@@ -278,6 +278,28 @@ def _outputs(p, which):
     return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
 
 
+def test_second_derivatives_match_central_differences():
+    """d/dp_w of the forward-mode slopes dtheta0/di and dM_w/di (what the MJX step's
+    linearly implicit spin update differentiates) against central differences of them.
+    Before the quadrature rule moved with theta0, the Wong path's second derivatives
+    dropped a Leibniz term (d2M_w/di dp_w was 2.6e-4 against 3.9e-4)."""
+
+    def slopes(p_w):
+        snow = sj.WongSnow(p_w, FRESH.z_w, FRESH.cohesion, FRESH.tan_phi, FRESH.shear_modulus)
+
+        def out(slip):
+            st = sj.solve_wheel(THESIS_WHEEL, snow, 4000.0, slip)
+            return jnp.stack([st.entry_angle, st.torque])
+
+        return jax.jvp(out, (jnp.asarray(0.3),), (jnp.asarray(1.0),))[1]
+
+    p_w = jnp.asarray(float(FRESH.p_w))
+    second = jax.jit(lambda p: jax.jvp(slopes, (p,), (jnp.ones_like(p),))[1])(p_w)
+    h = 1e-4 * float(p_w)
+    fd = (jax.jit(slopes)(p_w + h) - jax.jit(slopes)(p_w - h)) / (2 * h)
+    np.testing.assert_allclose(second, fd, rtol=1e-5)
+
+
 @pytest.mark.parametrize("shear", ["classic", "simplified"])
 def test_gradients_match_central_differences(shear):
     p0 = dict(

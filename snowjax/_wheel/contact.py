@@ -21,14 +21,16 @@ kink in the shear stress.  The integrals are therefore computed as
 
 Node positions are functions of the inputs but carry no gradient (`stop_gradient`): the
 exact integrals do not depend on them, so derivatives are those of the quadrature rule
-with the nodes held fixed.  Their error is that of the rule applied to the derivative
-integrands, which live inside the shear layer and so are larger than the values' error
-where the layer is thin: measured against the exact model (SciPy quad + brentq) on
-random in-range cases, equilibrium gradients are within 6e-7 relative for the simplified
-model (whose braking panels end where |U0| saturates, see `_simplified_layout`), and
-within 1.2e-4 relative (d/dK; 1.3e-5 for d/dc, 9e-6 for d/dslip, below 1e-6 for the
-rest; worst of 161 cases) for classic braking at its default nodes, where the panels
-are placed by the linear width of the shear layer (`_classic_layout`).
+with the nodes held fixed (with `moving_rule`, fixed relative to [0, theta0], which
+second derivatives w.r.t. theta0 need; `solve_wheel`'s derivative rule uses it). Their error is
+that of the rule applied to the derivative integrands, which live inside the shear layer
+and so are larger than the values' error where the layer is thin: measured against the
+exact model (SciPy quad + brentq) on random in-range cases, equilibrium gradients are
+within 6e-7 relative for the simplified model (whose braking panels end where |U0|
+saturates, see `_simplified_layout`), and within 1.2e-4 relative (d/dK; 1.3e-5 for d/dc,
+9e-6 for d/dslip, below 1e-6 for the rest; worst of 161 cases) for classic braking at
+its default nodes, where the panels are placed by the linear width of the shear layer
+(`_classic_layout`).
 """
 
 from __future__ import annotations
@@ -527,9 +529,24 @@ def _g_at_axle(theta0, slip, diameter, snow, shear, z0_rel):
 
 
 def _contact_scalar(
-    theta0, slip, diameter, width, snow, shear, n, bottomed=None, braking=True, vertical_only=False
+    theta0,
+    slip,
+    diameter,
+    width,
+    snow,
+    shear,
+    n,
+    bottomed=None,
+    braking=True,
+    vertical_only=False,
+    moving_rule=False,
 ):
     """(W, R, T, M) for scalar inputs, or W alone with `vertical_only`.
+
+    `moving_rule=True` moves the quadrature rule with theta0 for derivatives (values are
+    unchanged): needed for second derivatives w.r.t. theta0, whose Leibniz term the
+    fixed nodes drop (the first derivative's term vanishes: the stresses are 0 at the
+    entry), and slower, so only `solve_wheel`'s derivative rule asks for it.
 
     `bottomed` forces Z0 = 0 structurally; `braking=False` selects the two-panel rule,
     valid for slip >= 0 only (see `_nodes`).
@@ -540,6 +557,12 @@ def _contact_scalar(
     if bottomed is not None:
         z0_rel = jnp.where(bottomed, 0.0, z0_rel)
     theta, weight = _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking)
+    if moving_rule:
+        # The rule scaled with theta0 (a factor 1 in value): its nodes move with the
+        # upper limit, so that derivatives w.r.t. theta0 of every order are those of the
+        # rule on [0, theta0].
+        stretch = theta0 / jax.lax.stop_gradient(theta0)
+        theta, weight = theta * stretch, weight * stretch
 
     half_sin, half_cos = _sincos_half(theta)
     sin = 2 * half_sin * half_cos

@@ -61,6 +61,7 @@ from .inputs import (
     _validate_eagerly,
 )
 from .lateral import Lateral
+from .root import _implicit_root, _root_outputs
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -218,70 +219,6 @@ def _entry_angle_cap(depth, diameter):
     return jnp.minimum(theta_base, MAX_ENTRY_ANGLE), theta_base <= MAX_ENTRY_ANGLE
 
 
-def _partials_at_root(s, masks, target, params, t_target, t_params, forces):
-    """`forces` and its total tangent at the root s of W(theta0(s)) = target.
-
-    With W_s and W_p the partial derivatives at the root, the implicit function theorem
-    gives ds = (d target - W_p dp) / W_s, and every output moves by its partials along
-    (ds, dp).  One tangent pass along s and one along the parameters that carry a tangent
-    (the others stay symbolic zeros) serve W and every other output together.  Elements
-    whose theta0 is held at the cap (not a root; `forces` ignores s there) have W_s = 0
-    and take ds = 0.  Returns (outputs, their tangents, ds).
-    """
-    moving = jax.tree_util.tree_map(lambda t: t is not None, t_params, is_leaf=lambda t: t is None)
-    free, fixed = eqx.partition(params, moving)
-    t_free, _ = eqx.partition(t_params, moving, is_leaf=lambda t: t is None)
-    out, along_s = jax.jvp(lambda s: forces(s, masks, params), (s,), (jnp.ones_like(s),))
-    _, along_p = jax.jvp(
-        lambda free: forces(s, masks, eqx.combine(free, fixed)), (free,), (t_free,)
-    )
-    w_s, w_p = along_s[1], along_p[1]
-    d_target = jnp.zeros_like(w_p) if t_target is None else t_target
-    moves = w_s != 0
-    ds = jnp.where(moves, (d_target - w_p) / jnp.where(moves, w_s, 1.0), 0.0)
-    tangents = jax.tree_util.tree_map(lambda dp, dsv: dp + dsv * ds, along_p, along_s)
-    return out, tangents, ds
-
-
-@eqx.filter_custom_jvp
-def _implicit_root(s, masks, target, params, *, forces):
-    """The root s itself (computed without derivatives), carrying the implicit function
-    theorem's ds for the second derivatives of `_root_outputs` (its own rule ignores the
-    tangent of s; unused at first order, the computation is dropped by XLA)."""
-    del masks, target, params, forces
-    return s
-
-
-@_implicit_root.def_jvp
-def _implicit_root_jvp(primals, tangents, *, forces):
-    s, masks, target, params = primals
-    _, _, t_target, t_params = tangents
-    _, _, ds = _partials_at_root(s, masks, target, params, t_target, t_params, forces)
-    return _implicit_root(s, masks, target, params, forces=forces), ds
-
-
-@eqx.filter_custom_jvp
-def _root_outputs(s, masks, target, params, *, forces):
-    """`forces(s, masks, params)` -> (theta0, W, ...) at the root s of W(theta0(s)) = target.
-
-    Pass s as `_implicit_root(stopped s, ...)`.  The rule (`_partials_at_root`) supplies
-    the implicit function theorem's derivative, so a first derivative costs one tangent
-    (or, under `jax.grad`, one transposed tangent) of the output quadrature along the
-    parameters and one along s, and nothing of the Newton iteration.  Differentiating the
-    rule again (second derivatives) follows s's own implicit tangent.
-    """
-    del target
-    return forces(s, masks, params)
-
-
-@_root_outputs.def_jvp
-def _root_outputs_jvp(primals, tangents, *, forces):
-    s, masks, target, params = primals
-    _, _, t_target, t_params = tangents  # the tangent of s is part of the rule's own
-    out, t_out, _ = _partials_at_root(s, masks, target, params, t_target, t_params, forces)
-    return out, t_out
-
-
 def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     """Solve a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
@@ -308,12 +245,12 @@ def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
     def vertical_load(theta0) -> Array:
         return w_batch(theta0, slip, diameter, width, snow)
 
-    def forces(s, masks, params):  # (theta0, W, R, T, M) at s, explicit parameters
+    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M) at s
         over, bottomed = masks
         th_cap, i, d, b, sn = params
         theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
         fn = lambda th, i, d, b, sn, bt: _contact_scalar(  # noqa: E731
-            th, i, d, b, sn, shear, n_nodes, bt, braking
+            th, i, d, b, sn, shear, n_nodes, bt, braking, moving_rule=moving_rule
         )
         return (theta0, *jax.vmap(fn)(theta0, i, d, b, sn, bottomed))
 
@@ -572,7 +509,8 @@ def _solve_general_layout(
         max_steps,
     )
 
-    def forces(s, masks, params):  # (theta0, W, R, T, M[, F_y, M_z]) at s
+    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M[, F_y, M_z]) at s
+        del moving_rule  # `general_contact`'s nodes move with theta0 already
         (over,) = masks
         th_cap, *element = params
         theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
