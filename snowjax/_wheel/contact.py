@@ -49,7 +49,7 @@ from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
 from .distribution import WongReece
 from .general import _general_nodes_for, _rule, general_contact
-from .geometry import RigidWheel
+from .geometry import RigidWheel, _sincos_half
 
 ShearModel = Literal["classic", "simplified", "none"]
 SHEAR_MODELS = ("classic", "simplified", "none")
@@ -242,33 +242,6 @@ def _sigma_sin_integral(z0_rel, a, p_w):
 # --------------------------------------------------------------------------------------
 # Quadrature nodes
 # --------------------------------------------------------------------------------------
-
-
-# Taylor coefficients of sin(x) / x and cos(x) in powers of x^2, to x^18: on the rim's
-# half-angles |x| <= pi / 4 the truncation error is below 2e-17.
-_SIN_TAYLOR = tuple(
-    (-1) ** k / float(np.prod(np.arange(2, 2 * k + 2, dtype=float))) for k in range(10)
-)
-_COS_TAYLOR = tuple(
-    (-1) ** k / float(np.prod(np.arange(1, 2 * k + 1, dtype=float))) for k in range(10)
-)
-
-
-def _sincos_half(theta):
-    """(sin(theta / 2), cos(theta / 2)) for 0 <= theta <= pi / 2, by Taylor polynomials.
-
-    XLA's general-purpose float64 sine and cosine (argument reduction for any x) cost
-    about seven times an exp on CPU; the quadrature nodes only need half-angles up to
-    pi / 4, where two short polynomials are exact to rounding (tested against jnp.sin).
-    """
-    x = theta / 2
-    x2 = x * x
-    sin_poly = jnp.zeros_like(x2)
-    cos_poly = jnp.zeros_like(x2)
-    for cs, cc in zip(_SIN_TAYLOR[::-1], _COS_TAYLOR[::-1]):
-        sin_poly = sin_poly * x2 + cs
-        cos_poly = cos_poly * x2 + cc
-    return x * sin_poly, cos_poly
 
 
 def _sinh_panel(t, w, lo, hi, scale, toward_hi):

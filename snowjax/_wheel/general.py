@@ -34,6 +34,7 @@ from jaxtyping import Array
 
 from .._terrain.layered import LayeredSnow
 from .._terrain.shear import _signed_mobilisation
+from .geometry import _sincos_half
 from .lateral import bulldozing_pressure, combined_mobilisation
 
 # Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
@@ -107,8 +108,11 @@ def _safe_arccos(x):
 
 
 def _rim_sinkage_between(theta_eff, theta0, diameter):
-    """z = r (cos theta_eff - cos theta0) = D sin((theta0 - t)/2) sin((theta0 + t)/2)."""
-    return diameter * jnp.sin((theta0 - theta_eff) / 2) * jnp.sin((theta0 + theta_eff) / 2)
+    """z = r (cos theta_eff - cos theta0) = D sin(d / 2) sin(theta0 - d / 2) [m],
+    d = theta0 - theta_eff in [0, pi] (no cancellation near the entry; the half-angle of d
+    by `_sincos_half`, the sine and cosine of theta0 once per wheel)."""
+    half_sin, half_cos = _sincos_half(theta0 - theta_eff)
+    return diameter * half_sin * (jnp.sin(theta0) * half_cos - jnp.cos(theta0) * half_sin)
 
 
 def _braking_split(theta0, theta_r, slip, diameter):
@@ -219,8 +223,9 @@ def general_contact(
         theta_eff = jnp.where(theta >= theta_m, theta, mirrored)
     z = _rim_sinkage_between(theta_eff, theta0, diameter)
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
-    sin = jnp.sin(theta)
-    cos = jnp.cos(theta)
+    half_sin, half_cos = _sincos_half(theta)
+    sin = 2 * half_sin * half_cos
+    cos = 1 - 2 * half_sin**2
     tau_y = None
     if shear == "none":
         tau = jnp.zeros_like(sigma)
