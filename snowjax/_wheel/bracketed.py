@@ -87,8 +87,8 @@ class BracketedNewton(optx.AbstractRootFinder):
 # Newton steps every element of a batch takes together; elements still unconverged then
 # (a braked wheel whose W(theta0) is not monotone, a poor initial guess) continue alone.
 FIRST_PHASE_STEPS = 5
-# At most this many such stragglers are gathered into a small batch of their own; more
-# than that and the whole batch iterates on.
+# Such stragglers are gathered into small batches of this many and solved one batch
+# after the other.
 STRAGGLERS = 64
 
 
@@ -97,9 +97,10 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
 
     A batched iteration runs until its slowest element converges, so one straggler
     would make every element of the batch pay for its extra Newton steps.  All elements
-    take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered,
-    solved on their own from where they stopped, and scattered back.  Gradients w.r.t.
-    `params` come from each `optx.root_find`'s implicit adjoint, as for a single solve
+    take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered
+    in groups of `STRAGGLERS`, solved on their own from where they stopped, and scattered
+    back.  Forward-mode derivatives w.r.t. `params` come from each `optx.root_find`'s
+    implicit adjoint; reverse mode does not pass the groups' `lax.while_loop`
     (`solve_wheel` passes stopped parameters and differentiates at the root instead).
 
     **Arguments:** `residual(y, params) -> f` elementwise, `y0`, `lower`, `upper` (1-D,
@@ -134,9 +135,11 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
     size = y.shape[0]
     m = min(STRAGGLERS, size)
 
-    def stragglers():
-        # Slots beyond the stragglers hold index `size`: gathered as the last element
-        # (any valid input), dropped when scattering back.
+    def next_group(carry):
+        # Up to m stragglers gathered, solved from where they stopped, scattered back.
+        # Slots beyond them hold index `size`: gathered as the last element (any valid
+        # input), dropped when scattering back.
+        y, left = carry
         idx = jnp.nonzero(left, size=m, fill_value=size)[0]
         pick = lambda x: jnp.take(x, idx, axis=0, mode="clip")  # noqa: E731
         sub = solve(
@@ -146,14 +149,9 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
             jax.tree_util.tree_map(pick, params),
             rest,
         )
-        return y.at[idx].set(sub.value, mode="drop")
+        return y.at[idx].set(sub.value, mode="drop"), left.at[idx].set(False, mode="drop")
 
-    def everyone():
-        return solve(jax.lax.stop_gradient(y), state.lower, state.upper, params, rest).value
-
-    n_left = jnp.sum(left)
-    return jax.lax.cond(
-        n_left == 0,
-        lambda: y,
-        lambda: jax.lax.cond(n_left <= m, stragglers, everyone),
-    )
+    # One group at a time (none, usually): one compiled solve of m elements serves any
+    # number of stragglers.
+    y, _ = jax.lax.while_loop(lambda carry: jnp.any(carry[1]), next_group, (y, left))
+    return y
