@@ -172,15 +172,17 @@ def gradient_ratio(n, repeats=3):
     return times
 
 
-def in_step_latency(n_steps, n_wheels=4, n_vehicles=1):
+def in_step_latency(n_steps, n_wheels=4, n_vehicles=1, braking=False):
     """Per-wheel cost of solve_wheel inside a jitted lax.scan step, warm-started, for
-    `n_vehicles` vehicles of `n_wheels` wheels solved together each step."""
+    `n_vehicles` vehicles of `n_wheels` wheels solved together each step; driving slips
+    0.05-0.45, or with `braking` -0.45 to -0.05 (the four-panel rule)."""
     shape = (n_vehicles, n_wheels)
     loads = jnp.full(shape, 5000.0)
     offsets = jnp.arange(n_vehicles * n_wheels, dtype=float).reshape(shape)
 
     def step(theta, t):
         slip = 0.25 + 0.2 * jnp.sin(0.01 * t + offsets)  # slips change every step
+        slip = -slip if braking else slip
         st = sj.solve_wheel(WHEEL, SNOW, loads, slip, initial_entry_angle=theta)
         return st.entry_angle, st.drawbar_pull[0]
 
@@ -191,14 +193,14 @@ def in_step_latency(n_steps, n_wheels=4, n_vehicles=1):
     return t / n_steps / (n_vehicles * n_wheels)
 
 
-def in_step_latency_pinned(n_steps):
+def in_step_latency_pinned(n_steps, braking=False):
     """`in_step_latency` (4 wheels) in a fresh process pinned to one core: at this size
     the step is a few hundred small kernels, and an unpinned process's time varies by
     +-30 % with the core XLA's threads land on."""
     code = (
         "import os, sys; os.sched_setaffinity(0, {0}); sys.argv = ['run.py'];"
         f" sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); import run;"
-        f" print(run.in_step_latency({n_steps}))"
+        f" print(run.in_step_latency({n_steps}, braking={braking}))"
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return float(out.stdout.strip().splitlines()[-1])
@@ -494,11 +496,14 @@ def main(argv=None):
             add(f"first-call compile, {shear}", f"{c:.2f} s", "fresh process, batch of 1,000")
         progress.advance(task)
         lat = in_step_latency_pinned(200 if args.quick else 1000)
+        lat_braking = in_step_latency_pinned(200 if args.quick else 1000, braking=True)
         numbers["in_step_us_per_wheel"] = lat * 1e6
+        numbers["in_step_us_per_wheel_braking"] = lat_braking * 1e6
         add(
             "in-step latency (4 wheels, lax.scan, warm start)",
             f"{lat * 1e6:.1f} us per wheel",
-            "fresh process pinned to one core (target <= 5 us)",
+            "driving slips; fresh process pinned to one core (target <= 5 us); braking"
+            f" slips (four-panel rule) {lat_braking * 1e6:.1f} us",
         )
         sim = simulation_step_cost(200 if args.quick else 1000)
         numbers["simulation_us_per_wheel_step"] = sim * 1e6

@@ -770,7 +770,7 @@ def solve_wheel(
             n,
             int(max_steps),
             initial_entry_angle,
-            _layout(slip),
+            _layout(slip, warm_start=initial_entry_angle is not None),
         )
     n = _general_nodes_for(shear, nodes_per_panel)
     return _solve_general_jit(
