@@ -349,8 +349,9 @@ def simulate_longitudinal(
 
     **Cost.**  About 1–3 damped Newton iterations per step (more in hard braking and on
     the first steps from rest), each one `solve_wheel` of all wheels (warm-started) plus
-    its forward-mode Jacobian: measured 70–75 us per step per wheel (4 wheels, 400 N m,
-    dt = 10 ms, float64, on the project's shared 2-core CPU machine).
+    its forward-mode Jacobian: measured 14 us per step per wheel (4 wheels, 400 N m,
+    dt = 10 ms, float64, on the project's shared 2-core CPU machine; the README's
+    benchmark table has the current figure).
 
     **Errors.**  `ValueError` for a non-positive or non-finite `t1`, `dt`, `speed_eps`,
     `save_every`, mass, wheel inertia, a malformed `TorqueProfile` or non-finite initial
