@@ -613,3 +613,21 @@ def test_simplified_braking_sign_change_next_to_the_axle():
     got = np.array([got.vertical_load, got.motion_resistance, got.thrust, got.torque])
     assert slip == pytest.approx(-0.013262, rel=1e-4)  # the case described above
     np.testing.assert_allclose(got, want, rtol=3e-6)
+
+
+def test_half_angle_taylor_polynomials_match_numpy_sine_and_cosine():
+    """The quadratures' node sines and cosines (`_sincos_half`, Taylor polynomials in the
+    half-angle) against NumPy on the whole range of rim angles |theta| <= pi: within
+    rounding in float64 (also relative, near 0), and in float32."""
+    from snowjax._wheel.geometry import _sincos_half
+
+    theta = np.linspace(-np.pi, np.pi, 20_001)
+    half_sin, half_cos = (np.asarray(x) for x in _sincos_half(jnp.asarray(theta)))
+    np.testing.assert_allclose(half_sin, np.sin(theta / 2), rtol=1e-15, atol=5e-16)
+    np.testing.assert_allclose(half_cos, np.cos(theta / 2), rtol=0, atol=5e-16)
+    tiny = np.array([1e-300, 1e-12, 1e-6])
+    tiny_sin = np.asarray(_sincos_half(jnp.asarray(tiny))[0])
+    np.testing.assert_allclose(tiny_sin, np.sin(tiny / 2), rtol=1e-15, atol=0)
+    half_sin32, half_cos32 = _sincos_half(jnp.asarray(theta, jnp.float32))
+    np.testing.assert_allclose(np.asarray(half_sin32), np.sin(theta / 2), rtol=0, atol=3e-7)
+    np.testing.assert_allclose(np.asarray(half_cos32), np.cos(theta / 2), rtol=0, atol=3e-7)
