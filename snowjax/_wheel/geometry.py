@@ -55,7 +55,7 @@ def _sincos_half(theta):
 
     XLA's general-purpose float64 sine and cosine (argument reduction for any x) cost
     about seven times an exp on CPU; rim angles stay within |theta| <= pi, where two
-    short polynomials in the half-angle are exact to rounding (tested against jnp.sin).
+    short polynomials in the half-angle are exact to rounding (tested against NumPy).
     """
     x = theta / 2
     x2 = x * x
