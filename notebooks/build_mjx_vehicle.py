@@ -81,11 +81,11 @@ batched = jax.jit(jax.vmap(drive_with_gradient))"""),
 
 Rows 0 and 1 are the two named snows: the thesis's fresh snow (p_w = 85.55 kPa,
 tan φ = 0.0787) and a firmer, more frictional snow (p_w = 150 kPa, tan φ = 0.3). Rows 2–5
-perturb the fresh snow by ±0.1 % in p_w and ±1 % in tan φ (central differences). The rest
+perturb the fresh snow by ±0.1 % in p_w and in tan φ (central differences). The rest
 are random snows, p_w log-uniform in 60–200 kPa and tan φ uniform in 0.05–0.4."""),
     new_code_cell("""fresh = jnp.array([base.p_w, base.tan_phi])
 firm = jnp.array([150e3, 0.3])
-h = jnp.array([1e-3 * fresh[0], 1e-2 * fresh[1]])
+h = jnp.array([1e-3 * fresh[0], 1e-3 * fresh[1]])
 rng = np.random.default_rng(0)
 n_random = NUM_SNOWS - 6
 random = np.column_stack([np.exp(rng.uniform(np.log(60e3), np.log(200e3), n_random)),

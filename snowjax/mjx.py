@@ -101,11 +101,17 @@ except ImportError as exc:  # pragma: no cover - exercised only without the extr
     ) from exc
 
 from ._leaves import _as_float
-from ._sim.vehicle import DEFAULT_SPEED_EPS, wheel_forces
+from ._sim.vehicle import (
+    DEFAULT_SPEED_EPS,
+    _check_concrete,
+    _check_dynamic_shear,
+    _check_parameters,
+    wheel_forces,
+)
 from ._terrain.base import Terrain
 from ._wheel.contact import ShearModel
 from ._wheel.distribution import WongReece
-from ._wheel.equilibrium import _check_model
+from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import RigidWheel
 
 __all__ = [
@@ -405,6 +411,9 @@ def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distri
     dtype = speed.dtype
     load = jnp.broadcast_to(jnp.asarray(load, dtype), speed.shape)
     min_load = wheels.min_load.astype(dtype)
+    # A traced prescribed load that is negative or not finite: no force, INVALID_INPUT.
+    valid_load = jnp.isfinite(load) & (load >= 0)
+    load = jnp.where(valid_load, load, 0.0)
     airborne = jnp.clip(load / min_load, 0.0, 1.0)  # lift-off: forces fade to 0
     solve_load = jnp.maximum(load, min_load)
 
@@ -456,7 +465,7 @@ def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distri
         longitudinal_force=force,
         resisting_torque=torque,
         spin_damping=damp[:, 1, 1],
-        status=f.status,
+        status=jnp.where(valid_load, f.status, Status.INVALID_INPUT).astype(jnp.int32),
     )
     return wrench, damp, heading, axle, out
 
@@ -480,7 +489,9 @@ def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
         raise TypeError(f"d must be an mjx.Data (mjx.make_data), got {type(d).__name__}")
     if not isinstance(wheels, MjxWheels):
         raise TypeError(f"wheels must be a snowjax.mjx.MjxWheels, got {type(wheels).__name__}")
+    _check_dynamic_shear(shear, "snowjax.mjx")
     _check_model(wheels.wheel, snow, distribution, shear)
+    _check_parameters(wheels.wheel, snow, distribution, shear)
     if not (np.isfinite(speed_eps) and speed_eps > 0):
         raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
     if m.opt.integrator != mjx.IntegratorType.EULER:
@@ -536,12 +547,17 @@ def step(
     wrenches that were applied.
 
     **Errors:** `TypeError` for arguments of the wrong type, `ValueError` for a model
-    that is not Euler-integrated, a bad `speed_eps` or `shear`, or a shear model the
-    terrain does not support.
+    that is not Euler-integrated, a bad `speed_eps` or `shear`, a shear model the terrain
+    does not support, a concrete terrain or wheel parameter out of `solve_wheel`'s range
+    (NaN included) or a concrete prescribed `load` that is negative or not finite.  Under
+    `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
+    `Status.INVALID_INPUT`.
     """
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
+    if not isinstance(load, str):
+        _check_concrete("load", load, lambda x: x >= 0, ">= 0 N (0: the wheel is airborne)")
     if isinstance(load, str):
         # The floor's normal forces of the last solve, before fwd_position rebuilds them.
         load = _contact_loads(d, wheels)

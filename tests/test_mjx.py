@@ -172,6 +172,65 @@ def test_reverse_mode_with_one_solver_iteration():
     np.testing.assert_allclose(float(g), float(fd), rtol=3e-3)
 
 
+PLATE = sj.WongSnow.thesis_plate_rule_snow()  # drawbar pull < 0 at slip 1 (and bottomed out)
+
+
+@pytest.fixture(scope="module")
+def plate_runs(vehicle):
+    """1 s (200 steps) on the plate-rule snow from three states, one compiled rollout:
+    540 N m per wheel from rest; -540 N m per wheel from 5 m/s; coasting from 5 m/s with
+    the wheels spinning backwards (rim speed -3 m/s)."""
+    _, m, wheels, d0 = vehicle
+    run = jax.jit(
+        lambda qvel, ctrl: smjx.rollout(m, d0.replace(qvel=qvel), wheels, PLATE, ctrl, 200)
+    )
+    spin = 1 / float(wheels.wheel.diameter / 2)
+    starts = {
+        "driven": (0.0, 0.0, TORQUE),
+        "braked": (5.0, 5.0 * spin, -TORQUE),
+        "coasting": (5.0, -3.0 * spin, 0.0),
+    }
+    return {
+        name: run(d0.qvel.at[0].set(v).at[3:].set(w), jnp.full(4, torque))
+        for name, (v, w, torque) in starts.items()
+    }
+
+
+def test_snow_never_delivers_power_and_never_pushes_a_braked_vehicle(plate_runs):
+    """The snow's power on every wheel, `F v - M_w omega`, is never positive; a wheel
+    locked or spinning against its motion never pushes along it; the driven vehicle never
+    goes backwards (it went 76 m backwards in 10 s on the layered snow) and the braked and
+    coasting ones never speed up."""
+    for name, r in plate_runs.items():
+        w = r.wheels
+        assert np.all(np.asarray(w.status) != Status.INVALID_INPUT), name
+        axle = np.asarray(w.longitudinal_force * w.speed)
+        spin = np.asarray(-w.resisting_torque * w.wheel_speed)
+        assert np.all(axle + spin <= 1e-12 * (np.abs(axle) + np.abs(spin))), name
+        against = np.asarray(w.speed * w.wheel_speed) <= 0
+        assert np.all(axle[against] <= 0.0), name
+        assert np.all(np.isfinite(r.qpos)) and np.all(np.isfinite(r.qvel)), name
+    assert float(np.min(plate_runs["driven"].qpos[:, 0])) > -1e-3
+    for name in ("braked", "coasting"):
+        speed = np.asarray(plate_runs[name].qvel[:, 0])
+        assert np.all(np.diff(speed) <= 1e-9), name
+        assert speed[-1] < 5.0, name
+
+
+def test_traced_bad_prescribed_loads_are_flagged(vehicle):
+    """Under jit a negative or NaN prescribed load gives its wheel no snow force and
+    `Status.INVALID_INPUT`; the other wheels are solved."""
+    _, m, wheels, d0 = vehicle
+    d1 = d0.replace(qvel=d0.qvel.at[0].set(1.0).at[3:].set(1.0 / 0.368))
+    out = jax.jit(lambda load: smjx.step(m, d1, wheels, SNOW, load=load)[1])(
+        jnp.array([-100.0, 3500.0, jnp.nan, 3500.0])
+    )
+    status = np.asarray(out.status)
+    assert list(status) == [Status.INVALID_INPUT, Status.CONVERGED] * 2
+    assert np.all(np.asarray(out.longitudinal_force)[[0, 2]] == 0.0)
+    assert np.all(np.isfinite(np.asarray(out.longitudinal_force)))
+
+
 def test_notebook_runs(tmp_path):
     nb = run_notebook("mjx_vehicle.ipynb", tmp_path)
     text = outputs_text(nb)
@@ -203,3 +262,11 @@ def test_bad_input_raises(vehicle):
         smjx.step(mjx.put_model(rk4), d0, wheels, SNOW)
     with pytest.raises(ValueError, match="ctrl"):
         smjx.rollout(m, d0, wheels, SNOW, jnp.zeros(3), 2)
+    # Concrete bad snows and prescribed loads raise before anything is traced (a NaN snow
+    # gave NaN forces, a negative load zero forces with status CONVERGED).
+    with pytest.raises(ValueError, match="snow.p_w must be finite"):
+        smjx.step(m, d0, wheels, sj.WongSnow(np.nan, 0.2, 1e3, 0.1, 0.01))
+    with pytest.raises(ValueError, match=r"load must be finite and >= 0 N"):
+        smjx.step(m, d0, wheels, SNOW, load=jnp.array([-100.0, 3500.0, 3500.0, 3500.0]))
+    with pytest.raises(ValueError, match="simplified"):
+        smjx.step(m, d0, wheels, SNOW, shear="simplified")

@@ -369,6 +369,8 @@ def test_vehicle_geometry():
         (dict(steering="left"), TypeError, "steering"),
         (dict(steering=SteeringProfile([1.0, 0.0], [0.0, 0.1])), ValueError, "increasing"),
         (dict(steering=SteeringProfile([0.0, 1.0], [0.0, 2.0])), ValueError, "pi/2"),
+        # A controller's output: checked when it is known (here at trace time).
+        (dict(steering=lambda t, y: 3.0), ValueError, "steering input is outside"),
         (dict(torque=sj.TorqueProfile([0.0, 1.0], [[1.0, 2.0]] * 2)), ValueError, "Profile"),
         (dict(torque=np.ones(3)), ValueError, "torque"),
         (dict(initial_speed=np.inf), ValueError, "initial_speed"),
@@ -397,6 +399,17 @@ def test_bad_input_raises(kwargs, error, match):
     steering, torque = args.pop("steering"), args.pop("torque")
     with pytest.raises(error, match=match):
         simulate_planar(vehicle, snow, steering, torque, t1, dt, **args)
+
+
+def test_a_steering_controller_out_of_range_stops_the_run():
+    """A controller whose output depends on the state is only known while the program runs:
+    `eqx.error_if` stops it there (it used to run unflagged at 3 rad)."""
+    from snowjax._sim.planar import _steering_at
+
+    steer = jax.jit(lambda y: _steering_at(lambda t, state: 3.0 * state[0], 0.0, y))
+    assert float(steer(jnp.full(10, 0.1))) == pytest.approx(0.3)
+    with pytest.raises(Exception, match="steering input is outside"):
+        steer(jnp.ones(10)).block_until_ready()
 
 
 # ----------------------------------------------------------------------------------------

@@ -208,8 +208,14 @@ def test_wheel_forces_are_the_regularised_equilibrium(forces_at_states):
     v, w, f, st = forces_at_states
     slip, factor = sj.wheel_kinematics(v, w, WHEEL.diameter / 2, EPS)
     sign = np.where(v + w * WHEEL.diameter / 2 >= 0, 1.0, -1.0)
+    # The motion resistance's direction psi (module docs of wheel_forces), by hand: 1 when
+    # the axle moves forwards beyond the band or the wheel brakes; for (v, omega r) =
+    # (0.01, 0.03) m/s, psi = 2 s - s^2 = 0.19 with s = 0.01 / (2 eps) (slip 2/3, so no
+    # blend towards 1); 0 for a wheel spinning in place.
+    psi = np.array([1.0, 1.0, 1.0, 1.0, 0.19, 0.0, 1.0])
+    force = sign * factor * (st.thrust - psi * st.motion_resistance)
     np.testing.assert_allclose(f.slip, slip)
-    np.testing.assert_allclose(f.longitudinal_force, sign * factor * st.drawbar_pull, rtol=1e-12)
+    np.testing.assert_allclose(f.longitudinal_force, force, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(f.resisting_torque, sign * factor * st.torque, rtol=1e-12)
     np.testing.assert_allclose(f.sinkage, st.sinkage, rtol=1e-12)
     # At rest: no force.  Above the band: exactly the thesis model at slip 1 - v/(omega r).
@@ -307,6 +313,10 @@ def test_a_step_not_solved_even_when_retried_stops_the_integration():
         (dict(vehicle=sj.Vehicle(-1.0, 1.5, WHEEL, 2)), "mass"),
         (dict(torque=sj.TorqueProfile([0.0, 1.0], [[1.0, 2.0, 3.0]] * 2)), "TorqueProfile"),
         (dict(torque=sj.TorqueProfile([1.0, 0.0], [1.0, 2.0])), "increasing"),
+        (dict(torque=np.ones(3)), r"torque must be a number or one value per wheel, shape \(2,\)"),
+        (dict(torque=lambda t, v, w: jnp.ones(3)), r"the torque controller returned shape \(3,\)"),
+        (dict(snow=sj.WongSnow(np.nan, 0.2, 1e3, 0.1, 0.01)), "p_w"),
+        (dict(shear="simplified"), "braking extension"),
     ],
 )
 def test_bad_input_raises(kwargs, match):
@@ -319,6 +329,10 @@ def test_bad_input_raises(kwargs, match):
         )
     with pytest.raises(ValueError, match="load"):
         sj.wheel_forces(1.0, 2.0, -5.0, WHEEL, SNOW)
+    with pytest.raises(ValueError, match="snow.p_w must be finite"):
+        sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, sj.WongSnow(np.nan, 0.2, 1e3, 0.1, 0.01))
+    with pytest.raises(ValueError, match="shear='simplified'"):
+        sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, SNOW, "simplified")
 
 
 def test_notebook_runs(tmp_path):

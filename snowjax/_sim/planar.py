@@ -48,7 +48,10 @@ with d = sign(v_x + omega r_w) the direction of travel: the angle by which the w
 velocity (V cos beta, -V sin beta) turns clockwise from its heading, so that the lateral
 force of `solve_wheel` (positive for beta > 0) opposes the side-slip.  A wheel sliding
 sideways at v_x -> 0 has beta -> +-90 degrees; the clip keeps `tan(beta)` finite there,
-where the lateral shear is fully mobilised anyway.
+where the lateral shear is fully mobilised anyway.  As in the longitudinal simulation
+the force along the heading is the thrust minus `psi(d v_x / (2 speed_eps))` times the
+motion resistance (`psi` odd, C^1 and +-1 outside the band): the compaction resistance
+opposes the wheel's motion along its heading, also when the wheel spins against it.
 
 **Start from rest (regularisation).**  The longitudinal forces (drawbar pull, M_w) carry
 the factor of `snowjax.wheel_kinematics`, `phi(|v_x + omega r_w| / (2 speed_eps))` with
@@ -60,13 +63,15 @@ combined with the side speed) reaches `speed_eps`; a wheel sliding sideways with
 is therefore resisted.  Where `|v_x| + |v_y|` is below `speed_eps` times the machine
 epsilon (1.1e-17 m/s by default in float64) the slip angle is set to 0, so that at rest
 every value and every derivative is finite.  Slip and slip angle do not depend on
-`speed_eps`, so nothing in states where both factors are 1 does.
+`speed_eps`, so nothing in states where both factors are 1 and `|v_x| >= 2 speed_eps`
+does.
 
 The time stepping of these equations is `planar_stepping.simulate_planar`.
 """
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import diffrax
@@ -221,8 +226,18 @@ def _check_steering_profile(profile: SteeringProfile) -> None:
 
 
 def _steering_at(steering, t, y):
-    value = steering(t, y) if callable(steering) else steering
-    return jnp.asarray(value, y.dtype).reshape(())
+    """Steering input delta [rad] at time t; a run-time error (`eqx.error_if`) if it is not
+    finite and inside (-pi/2, pi/2): a controller's output is only known then (constant and
+    profile inputs are also checked before the run, when concrete)."""
+    raw: Any = steering(t, y) if callable(steering) else steering
+    shape = jnp.shape(raw)
+    if math.prod(shape) != 1:
+        raise ValueError(f"steering must be one angle [rad]; got shape {shape}")
+    message = "simulate_planar: the steering input is outside (-pi/2, pi/2) rad or not finite"
+    if not _is_traced(raw) and not abs(float(np.asarray(raw))) < np.pi / 2:
+        raise ValueError(f"{message}: {float(np.asarray(raw))!r}")
+    value = jnp.asarray(raw, y.dtype).reshape(())
+    return eqx.error_if(value, ~(jnp.abs(value) < np.pi / 2), message)
 
 
 # ---------------------------------------------------------------------------------------
@@ -231,8 +246,9 @@ def _steering_at(steering, t, y):
 
 
 def _planar_kinematics(vx, vy, omega, radius, speed_eps):
-    """(slip, slip angle, direction, longitudinal factor, lateral factor) of the module docs."""
-    slip, direction, scale_x = _kinematics(vx, omega, radius, speed_eps)
+    """(slip, slip angle, direction, longitudinal factor, lateral factor, compaction
+    direction) of the module docs."""
+    slip, direction, scale_x, compaction = _kinematics(vx, omega, radius, speed_eps)
     floor = speed_eps * float(np.finfo(vx.dtype).eps)
     along, side = jnp.abs(vx), -direction * vy
     moving = along + jnp.abs(side) > floor
@@ -244,7 +260,7 @@ def _planar_kinematics(vx, vy, omega, radius, speed_eps):
     q = jnp.where(sliding, jnp.sqrt(jnp.where(sliding, q2, 1.0)), 0.0)
     gap = 1 - jnp.minimum(q / speed_eps, 1.0)
     scale_y = 1 - gap * gap
-    return slip, beta, direction, scale_x, scale_y
+    return slip, beta, direction, scale_x, scale_y, compaction
 
 
 def planar_wheel_kinematics(
@@ -281,7 +297,7 @@ def planar_wheel_kinematics(
     dtype = jnp.result_type(speed, lateral_speed, wheel_speed, radius, float)
     vx, vy, omega, r = (jnp.asarray(x, dtype) for x in (speed, lateral_speed, wheel_speed, radius))
     vx, vy, omega, r = jnp.broadcast_arrays(vx, vy, omega, r)
-    slip, beta, _, scale_x, scale_y = _planar_kinematics(vx, vy, omega, r, float(speed_eps))
+    slip, beta, _, scale_x, scale_y, _ = _planar_kinematics(vx, vy, omega, r, float(speed_eps))
     return slip, beta, scale_x, scale_y
 
 
@@ -314,7 +330,8 @@ def _planar_wheel_forces(
     """Snow forces on the four wheels at body velocities (u, v, r) and spins omega."""
     radius = vehicle.wheel.diameter / 2
     vx, vy = _body_to_wheel(vehicle, u, v, r, steer)
-    slip, beta, direction, scale_x, scale_y = _planar_kinematics(vx, vy, omega, radius, speed_eps)
+    kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
+    slip, beta, direction, scale_x, scale_y, compaction = kinematics
     st = solve_wheel(
         vehicle.wheel,
         snow,
@@ -332,7 +349,7 @@ def _planar_wheel_forces(
     # vertical: forces along the heading and the axle change sign, the moment about the
     # vertical does not.
     return _PlanarForces(
-        drawbar_pull=direction * scale_x * st.drawbar_pull,
+        drawbar_pull=direction * scale_x * (st.thrust - compaction * st.motion_resistance),
         lateral_force=direction * scale_y * st.lateral_force,
         resisting_torque=direction * scale_x * st.torque,
         aligning_torque=scale_y * st.aligning_torque,

@@ -288,10 +288,13 @@ def simulate_planar(
 
     **Errors.**  `ValueError` for non-positive or non-finite `t1`, `dt`, `speed_eps`,
     `save_every`, mass, inertias, wheelbase, track width, a CG position outside
-    (0, wheelbase), a steering input outside (-pi/2, pi/2), malformed profiles or
-    non-finite initial speeds (with concrete values); `TypeError` for arguments of the
-    wrong type.  A step that cannot be solved even after the retries stops the
-    integration: `result` is set (no exception) and the remaining rows hold inf states.
+    (0, wheelbase), a steering input outside (-pi/2, pi/2) (also a controller's output
+    when it does not depend on the state), malformed profiles, non-finite initial speeds
+    or snow and wheel parameters outside `solve_wheel`'s range (with concrete values);
+    `TypeError` for arguments of the wrong type.  A steering controller whose output
+    leaves (-pi/2, pi/2) during the run stops it with an `eqx.error_if` error.  A step
+    that cannot be solved even after the retries stops the integration: `result` is set
+    (no exception) and the remaining rows hold inf states.
     """
     if shear == "simplified":
         raise ValueError(

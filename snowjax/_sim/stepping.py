@@ -44,7 +44,7 @@ import optimistix as optx
 from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel, _check_shear
+from .._wheel.contact import ShearModel
 from .._wheel.distribution import WongReece
 from .._wheel.equilibrium import _check_model
 from .levenberg_marquardt import _LevenbergMarquardt
@@ -54,6 +54,8 @@ from .vehicle import (
     Trajectory,
     Vehicle,
     _check_concrete,
+    _check_dynamic_shear,
+    _check_parameters,
     _check_profile,
     _torque_at,
     _wheel_forces,
@@ -237,13 +239,14 @@ def _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
 
 def _check_run(wheel, snow, distribution, shear, t1, dt, speed_eps, save_every) -> int:
     """Checks shared by the simulations' entry points; returns the number of steps."""
-    _check_shear(shear)
+    _check_dynamic_shear(shear, "the simulations")
     if not isinstance(snow, Terrain):
         raise TypeError(
             "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
             f"got {type(snow).__name__}"
         )
     _check_model(wheel, snow, distribution, shear)
+    _check_parameters(wheel, snow, distribution, shear)
     for name, value in (("t1", t1), ("dt", dt), ("speed_eps", speed_eps)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be finite and > 0; got {value!r}")
@@ -327,7 +330,8 @@ def simulate_longitudinal(
     - `initial_speed`: v(0) [m/s] (default 0: start from rest).
     - `initial_wheel_speed`: omega(0) [rad/s], scalar or (n,); default
       `initial_speed / r` (free rolling, slip 0).
-    - `shear`: shear model of `solve_wheel`.
+    - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
+      refused: its braking extension can push a braked wheel forward).
     - `speed_eps`: regularisation speed at rest [m/s] (see `wheel_kinematics`).
     - `save_every`: save every k-th step (the wheel outputs are recomputed at the saved
       states only).
@@ -357,10 +361,11 @@ def simulate_longitudinal(
     `save_every`, mass, wheel inertia, a malformed `TorqueProfile` or non-finite initial
     speeds (with concrete values).  A step that cannot be solved even after the
     retries stops the integration: `result` is set (no exception) and the remaining rows
-    hold inf states with `Status.INVALID_INPUT`.  Snow or wheel parameters outside
-    `solve_wheel`'s valid range (say tan phi < 0) give NaN forces and a failed
-    `result`; differentiated, they make lineax raise on the non-finite values inside
-    the implicit solves, so optimise positive parameters through their logarithms.
+    hold inf states with `Status.INVALID_INPUT`.  Concrete snow or wheel parameters
+    outside `solve_wheel`'s valid range (say tan phi < 0, or NaN) raise `ValueError`
+    naming the field; traced ones give NaN forces and a failed `result`, and
+    differentiated they make lineax raise on the non-finite values inside the implicit
+    solves, so optimise positive parameters through their logarithms.
     """
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")

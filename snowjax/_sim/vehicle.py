@@ -18,10 +18,40 @@ transfer, tyre deflection.  A wheel whose applied torque is zero rolls freely (u
 **Slip.**  The argument of `solve_wheel` is the driving slip of eq. (2.6),
 `i = 1 - v / (omega r)`, computed as `(omega r - v) / max(|omega r|, v / 2)`, clipped to
 [-1, 1]: exact for driving (0 <= v <= omega r, i in [0, 1]) and for braking down to
-`v = 2 omega r` (i = -1); harder braking, up to the locked wheel, is held at i = -1, where
-the shear stress of the thesis's snow (K << D) is already mobilised backwards over nearly
-the whole contact.  A wheel travelling backwards (v + omega r < 0) is the mirror image of
-one travelling forwards: the model is evaluated at (-v, -omega) and its forces change sign.
+`v = 2 omega r` (i = -1); harder braking, up to the locked wheel and a wheel spinning
+backwards slower than the vehicle moves forwards, is held at i = -1, where the shear
+stress of the thesis's snow (K << D) is already mobilised backwards over nearly the whole
+contact.  A wheel whose rim moves backwards (v + omega r < 0) is the mirror image of one
+whose rim moves forwards: the model is evaluated at (-v, -omega) and its forces change
+sign.  In that frame (v' = d v, omega' = d omega, d = sign(v + omega r)) the rim speed
+omega' r is at least -v', so the rim slides backwards over the snow wherever the model's
+shear acts forwards, and vice versa.
+
+**Every sign of v and omega: the snow never drives the vehicle.**  The contact's shear
+(the thrust T and the torque M_w, from the shear displacement 4.10) opposes the sliding of
+the rim over the snow, and the compaction resistance R_x (4.16) opposes the axle's motion:
+
+    F = d * phi * (T - psi R_x),      M = d * phi * M_w,
+
+psi = 1 wherever the axle moves forwards in the mirrored frame (v' >= 2 speed_eps, or a
+braked wheel, v' >= omega' r), so that F is the drawbar pull (2.10) of `solve_wheel`, and
+psi = -1 where it moves backwards (v' <= -2 speed_eps): a wheel spinning faster than the
+vehicle moves the other way (slip above 1, held at 1; e.g. v = 8 m/s with
+omega r = -11 m/s, or a driven wheel sliding back down a slope), whose model front region
+lies behind the axle's motion.  In between, for a wheel spinning nearly in place,
+`psi = a + (1 - a) b` with `a = 2 s - s |s|`, `s = clip(v' / (2 speed_eps), -1, 1)`, and
+b the smoothstep `3 t^2 - 2 t^3` of `t = clip(2 v' / (omega' r) - 1, 0, 1)`: psi is
+continuous (C^1 away from rest, where phi = 0) and has the sign of v'.  The power the snow
+delivers, `F v - M omega`, is then `-phi psi R_x v'` plus the shear's power, which is
+never positive where the shear displacement and the rim's sliding velocity have the same
+sign everywhere on the contact (driving, slip above 1).  A braked wheel's shear can return
+some of the energy stored in the snow (the Janosi–Hanamoto stress follows the shear
+displacement, which falls again behind its peak): measured at most 43 % of R_x v' over
+600,000 random in-range braking cases of Wong snow (front region and two Wong–Reece
+distributions), so the total stays dissipative; the tests check
+`F v - M omega <= 0` over random states of every sign on every terrain.  The simplified
+shear model (4.13) is refused here: its braking extension can deliver power (a braked
+wheel on snow with c >> p_w gets a forward thrust; see `wheel_forces`).
 
 **Start from rest (regularisation).**  At v = omega = 0 the slip is 0/0, and the model,
 whose forces at zero slip are not zero (the rim's geometry shears the snow even at i = 0),
@@ -35,12 +65,12 @@ its 0/0 at the origin is guarded.  Consequences, all tested: a vehicle at rest w
 torque stays at rest; a coasting vehicle comes to rest and stays there; a torque below
 the self-propelled torque `M_w(i*)` (i* where the drawbar pull vanishes) leaves the
 vehicle creeping at a speed below `speed_eps` (a viscous contact, the price of the
-regularisation); nothing in states with `(v + omega r) / 2 >= speed_eps` depends on
-`speed_eps`.  The force factor is also 0 on the counter-rotation line `v = -omega r`
-(wheel spinning backwards as fast as the vehicle moves forwards), where the mirror
-switches: the model does not describe wheels spinning against the direction of travel,
-so model brakes as a torque that opposes the spin (a controller `torque(t, v, omega)`);
-a constant negative torque stops the vehicle and then drives it backwards.
+regularisation; the compaction factor psi lets a wheel spinning in place creep forward
+until psi R_x balances the thrust); nothing in states with `|v + omega r| >= 2 speed_eps`
+and `|v| >= 2 speed_eps` depends on `speed_eps`.  The force factor is also 0 on the
+counter-rotation line `v = -omega r` (wheel spinning backwards as fast as the vehicle
+moves forwards), where the mirror switches; a constant negative torque stops the vehicle
+and then drives it backwards.
 
 The time stepping of these equations is `stepping.simulate_longitudinal`.
 """
@@ -62,6 +92,7 @@ from .._wheel.contact import ShearModel, _check_shear
 from .._wheel.distribution import WongReece
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import RigidWheel
+from .._wheel.inputs import _validate_eagerly
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -83,11 +114,28 @@ DEFAULT_SPEED_EPS = 0.05  # [m/s]
 # ---------------------------------------------------------------------------------------
 
 
+def _compaction_direction(speed, rim_speed, speed_eps):
+    """psi of the module docs: the direction of the axle's motion, which the compaction
+    resistance opposes, at mirrored speeds (v', omega' r); in [-1, 1], C^1 except at rest.
+
+    `a = band(v' / (2 speed_eps))` (odd, C^1, +-1 outside the band) is blended towards 1
+    as the speed ratio q = v' / (omega' r) rises from 1/2 to 1 (slip from 1/2 to 0), so a
+    braked wheel (q >= 1, or a rim at rest or turning backwards) has psi = 1 at any speed.
+    """
+    s = jnp.clip(speed / (2 * speed_eps), -1.0, 1.0)
+    a = 2 * s - s * jnp.abs(s)
+    turning = rim_speed > 0
+    q = jnp.where(turning, speed / jnp.where(turning, rim_speed, 1.0), 1.0)
+    t = jnp.clip(2 * q - 1, 0.0, 1.0)
+    braked = t * t * (3 - 2 * t)
+    return a + (1 - a) * braked
+
+
 def _kinematics(speed, wheel_speed, radius, speed_eps):
-    """(model slip, direction, force scale) of the regularisation in the module docs."""
+    """(model slip, direction, force scale, compaction direction) of the module docs."""
     rim = wheel_speed * radius
     direction = jnp.where(speed + rim >= 0, 1.0, -1.0).astype(rim.dtype)
-    v, u = direction * speed, direction * rim  # the mirror image travelling forwards
+    v, u = direction * speed, direction * rim  # the mirror image whose rim moves forwards
     # Only to avoid 0 / 0 at rest: below speed_eps * eps the force factor is 0 to rounding.
     # (A floor of sqrt(tiny) made d slip / dv ~ 1e154 at rest, and second derivatives,
     # e.g. forward mode over the slopes snowjax.mjx uses, overflowed to inf.)
@@ -96,7 +144,7 @@ def _kinematics(speed, wheel_speed, radius, speed_eps):
     slip = jnp.clip(slip, -1.0, 1.0)
     gap = 1 - jnp.minimum(jnp.abs(speed + rim) / (2 * speed_eps), 1.0)
     scale = 1 - gap * gap  # C^1: 0 at v + omega r = 0, 1 from |v + omega r| >= 2 eps on
-    return slip, direction, scale
+    return slip, direction, scale, _compaction_direction(v, u, speed_eps)
 
 
 def wheel_kinematics(
@@ -115,8 +163,11 @@ def wheel_kinematics(
     - force factor: `phi(|v + omega r| / (2 speed_eps))`, `phi(s) = 1 - (1 - min(s,
       1))^2`, the factor on both contact forces: 0 at rest, 1 as soon as
       `|v + omega r| >= 2 speed_eps`, C^1 in between.  The forces of `wheel_forces` are
-      `direction * factor * (drawbar pull, M_w)` at this slip, direction =
-      sign(v + omega r).
+      `d * factor * (thrust - psi * motion resistance, M_w)` at this slip, with
+      d = sign(v + omega r) and psi the direction of the axle's motion in the mirrored
+      frame, `psi(d v / (2 speed_eps))`, `psi(s) = 2 s_c - s_c |s_c|`, `s_c = clip(s,
+      -1, 1)`: the compaction resistance opposes the axle's motion, also where the
+      axle moves against the rim (slip above 1, held at 1).
 
     **Arguments:** `speed` v [m/s], `wheel_speed` omega [rad/s], `radius` r = D/2 [m],
     `speed_eps` [m/s] (> 0).
@@ -124,7 +175,7 @@ def wheel_kinematics(
     **Returns:** `(slip [-], force_factor [-])`.
     """
     dtype = jnp.result_type(speed, wheel_speed, radius, float)
-    slip, _, factor = _kinematics(
+    slip, _, factor, _ = _kinematics(
         jnp.asarray(speed, dtype),
         jnp.asarray(wheel_speed, dtype),
         jnp.asarray(radius, dtype),
@@ -136,7 +187,9 @@ def wheel_kinematics(
 class WheelForces(eqx.Module):
     """Forces of the snow on one rigid wheel in a simulation step (see `wheel_forces`).
 
-    - `longitudinal_force`: drawbar pull (2.10) along +x on the axle [N] (regularised).
+    - `longitudinal_force`: force along +x on the axle [N]: the drawbar pull (2.10),
+      thrust minus motion resistance, with the motion resistance turned against the
+      axle's motion (`wheel_kinematics`) and regularised at rest.
     - `resisting_torque`: M_w (2.12), the torque of the snow about the axle opposing a
       forward-spinning wheel [N m] (regularised); the wheel obeys
       `I domega/dt = T - resisting_torque`.
@@ -157,7 +210,9 @@ class WheelForces(eqx.Module):
 def _wheel_forces(
     speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess, n, steps, distribution=None
 ):
-    slip, direction, scale = _kinematics(speed, wheel_speed, wheel.diameter / 2, speed_eps)
+    slip, direction, scale, compaction = _kinematics(
+        speed, wheel_speed, wheel.diameter / 2, speed_eps
+    )
     st = solve_wheel(
         wheel,
         snow,
@@ -170,7 +225,7 @@ def _wheel_forces(
         initial_entry_angle=guess,
     )
     return WheelForces(
-        longitudinal_force=direction * scale * st.drawbar_pull,
+        longitudinal_force=direction * scale * (st.thrust - compaction * st.motion_resistance),
         resisting_torque=direction * scale * st.torque,
         sinkage=st.sinkage,
         entry_angle=st.entry_angle,
@@ -180,6 +235,30 @@ def _wheel_forces(
 
 
 _wheel_forces_jit = eqx.filter_jit(_wheel_forces)
+
+
+def _check_dynamic_shear(shear, where: str) -> None:
+    """The shear models a simulation step accepts: "classic" and "none".
+
+    The simplified model's braking extension (4.13 with the mobilisation mirrored for
+    slip < 0) can deliver power to the wheel: on snow with c >> p_w its exponent U0 stays
+    positive over the whole contact of a braked wheel at a large entry angle, so the snow
+    pushes the braked wheel forward (`tests/test_properties.py` keeps such a case).
+    """
+    _check_shear(shear)
+    if shear == "simplified":
+        raise ValueError(
+            f"shear='simplified' (eq. 4.13) is refused by {where}: its braking extension can"
+            " push a braked wheel forward (it delivers power on snow with cohesion >> p_w);"
+            " use shear='classic' (or 'none')."
+        )
+
+
+def _check_parameters(wheel, snow, distribution, shear) -> None:
+    """`solve_wheel`'s checks of the wheel, terrain and distribution leaves, eagerly (the
+    force functions call `solve_wheel` inside a compiled program, where they are traced):
+    ValueError naming the field of a concrete out-of-range value."""
+    _validate_eagerly(wheel, snow, distribution, np.ones(()), np.zeros(()), shear)
 
 
 def _check_concrete(name, value, ok, allowed):
@@ -211,7 +290,12 @@ def wheel_forces(
     rest), solves the quasi-static equilibrium (4.14) with `solve_wheel` at that slip,
     and returns the drawbar pull (2.10) as the longitudinal force on the axle and M_w
     (2.12) as the torque resisting the wheel's spin, both multiplied by the force factor
-    (and mirrored for a wheel travelling backwards; see the module documentation).
+    (and mirrored for a wheel whose rim moves backwards).  For every sign of `speed` and
+    `wheel_speed` the shear opposes the rim's sliding over the snow and the motion
+    resistance opposes the axle's motion (it is turned round, through a C^1 band of
+    width 2 `speed_eps`, when the axle moves against the rim), so the power the snow
+    delivers, `longitudinal_force * speed - resisting_torque * wheel_speed`, is never
+    positive (tested over random states of every sign).
     Pure JAX: works under `jax.jit`, `jax.vmap`, `jax.grad` and `jax.jvp`; `speed`,
     `wheel_speed`, `load` and `initial_entry_angle` broadcast with NumPy rules.
 
@@ -222,8 +306,8 @@ def wheel_forces(
     - `load`: vertical load F_z on the wheel [N], > 0.
     - `wheel`, `snow`: `RigidWheel` (D, b [m]) and the terrain, any `snowjax.Terrain`
       (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets).
-    - `shear`: shear model of `solve_wheel` (`"classic"`, `"simplified"`, `"none"`;
-      `"simplified"` only for `WongSnow` without a distribution).
+    - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
+      refused: its braking extension can push a braked wheel forward).
     - `speed_eps`: regularisation speed [m/s], > 0.
     - `initial_entry_angle`: warm start theta0 [rad] for `solve_wheel`, e.g. the
       `entry_angle` of the previous simulator step; changes only the iteration count.
@@ -246,12 +330,14 @@ def wheel_forces(
     `I omega^2 r / (v dM_w/di)`, or use an implicit step as `simulate_longitudinal` and
     `snowjax.mjx.step` do).
 
-    **Errors.**  With concrete inputs, non-finite `speed`/`wheel_speed`, `load <= 0` or
-    `speed_eps <= 0` raise `ValueError`; under `jit` invalid elements give
+    **Errors.**  With concrete inputs, non-finite `speed`/`wheel_speed`, `load <= 0`,
+    `speed_eps <= 0` or a wheel, terrain or distribution parameter out of `solve_wheel`'s
+    range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
-    _check_shear(shear)
+    _check_dynamic_shear(shear, "wheel_forces")
     _check_model(wheel, snow, distribution, shear)
+    _check_parameters(wheel, snow, distribution, shear)
     _check_concrete("speed", speed, lambda x: np.ones_like(x, bool), "a number [m/s]")
     _check_concrete("wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]")
     _check_concrete("load", load, lambda x: x > 0, "> 0 N")
@@ -372,8 +458,16 @@ class Trajectory(eqx.Module):
 
 
 def _torque_at(torque, t, speed, wheel_speed):
-    value = torque(t, speed, wheel_speed) if callable(torque) else torque
-    return jnp.broadcast_to(jnp.asarray(value, wheel_speed.dtype), wheel_speed.shape)
+    """Applied torque per wheel [N m], shape of `wheel_speed`; ValueError naming `torque`
+    for a value (or a controller's output) of another shape than () or (n,)."""
+    value = jnp.asarray(torque(t, speed, wheel_speed) if callable(torque) else torque)
+    if value.shape not in ((), wheel_speed.shape):
+        source = "the torque controller returned" if callable(torque) else "got"
+        raise ValueError(
+            f"torque must be a number or one value per wheel, shape {wheel_speed.shape}"
+            f" [N m]; {source} shape {value.shape}"
+        )
+    return jnp.broadcast_to(value.astype(wheel_speed.dtype), wheel_speed.shape)
 
 
 def _check_profile(profile, n):

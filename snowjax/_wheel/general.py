@@ -115,6 +115,21 @@ def _rim_sinkage_between(theta_eff, theta0, diameter):
     return diameter * half_sin * (jnp.sin(theta0) * half_cos - jnp.cos(theta0) * half_sin)
 
 
+def _below_base(sinkage, depth):
+    """The rim sinkage [m] kept 4 ulp of `depth` [m] above the base.
+
+    A wheel resting on the base (theta0 = the cap, `Status.BOTTOMED_OUT`) reaches the
+    depth at theta = 0, where a law such as Wong's diverges (logarithmically: the integral
+    is finite).  Nodes next to theta = 0 (a braking split by the axle, float32's coarse
+    spacing) would get a sinkage that rounds to the depth and an infinite stress; there
+    the stress is taken at 4 ulp above the base instead (the lost part of the integral is
+    of the order of the node's width, 1e-8 relative in float64).  A converged entry angle
+    stays further from the base (`S_MIN`), so its nodes are never moved.
+    """
+    eps = float(np.finfo(sinkage.dtype).eps)
+    return jnp.minimum(sinkage, depth * (1 - 4 * eps))
+
+
 def _braking_split(theta0, theta_r, slip, diameter):
     """Angle in (theta_r, theta0) where the shear displacement (4.10) changes sign.
 
@@ -221,7 +236,7 @@ def general_contact(
         span = jnp.where(theta_m > theta_r, theta_m - theta_r, 1.0)
         mirrored = theta0 - (theta - theta_r) / span * (theta0 - theta_m)
         theta_eff = jnp.where(theta >= theta_m, theta, mirrored)
-    z = _rim_sinkage_between(theta_eff, theta0, diameter)
+    z = _below_base(_rim_sinkage_between(theta_eff, theta0, diameter), terrain.depth)
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
     half_sin, half_cos = _sincos_half(theta)
     sin = 2 * half_sin * half_cos
