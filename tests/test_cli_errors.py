@@ -76,6 +76,12 @@ CASES = [
      "--param-grid does nothing with --list"),
     (["sweep", "--param-grid", "--out", "{tmp}/s"],
      "--param-grid combines parameter lists, but no parameter option has more than one value"),
+    # A rule of the terrain with the wheel width, checked per parameter set before any
+    # chunk is padded (the chunk's padding was counted as invalid elements).
+    (["sweep", "--terrain", "bekker", "--set", "k_phi=-1e9,5e5", "--param-grid", "--loads",
+      "1000,2000", "--slips", "0.1,0.2", "--out", "{tmp}/s"],
+     "snowjax sweep: error: k_c / b + k_phi must be finite and > 0 at the wheel width b; got"
+     " -999981404.2553191 at parameter set 0"),
     (["sweep", "--coordinator", "localhost:1234", "--out", "{tmp}/s"],
      "--coordinator only applies with --distributed"),
     (["sweep", "--num-processes", "2", "--process-id", "0", "--out", "{tmp}/s"],
@@ -126,6 +132,9 @@ def test_negative_slips_run(tmp_path, capsys):
     argv = ["sweep", "--slips", "-0.5:0:3", "--loads", "3000", "--out", str(out), "--no-progress"]
     assert main(argv) == 0
     assert (out / "sweep.csv").read_text().count("\n") == 4  # header + 3 rows
+    printed = capsys.readouterr().out
+    rate = float(printed.split(" points/s")[0].rsplit(" ", 1)[1].replace(",", ""))
+    assert rate > 0  # three points in a few seconds: a rate below 1, not "0 points/s"
 
 
 def test_csv_with_a_byte_order_mark_is_read(tmp_path, capsys):
@@ -176,3 +185,79 @@ def test_fit_with_extreme_values_prints_no_runtime_warning(tmp_path, capsys):
     captured = capsys.readouterr()
     assert not [w for w in caught if issubclass(w.category, RuntimeWarning)]
     assert "RuntimeWarning" not in captured.err + captured.out
+
+
+def _single_wheel_folder(tmp_path, edit=None, drop_grousered=False):
+    """A copy of the measured single-wheel data, `edit(text) -> text` applied to
+    smooth_wheel.csv."""
+    from .test_single_wheel import _data_folder
+
+    source = _data_folder()
+    folder = tmp_path / "data"
+    folder.mkdir()
+    for name in ("smooth_wheel.csv", "grousered_wheel.csv"):
+        if name == "grousered_wheel.csv" and drop_grousered:
+            continue
+        text = (source / name).read_text(encoding="utf-8")
+        if edit is not None and name == "smooth_wheel.csv":
+            text = edit(text)
+        (folder / name).write_text(text, encoding="utf-8")
+    return folder
+
+
+def _replace_field(line_number, column, value):
+    """An edit that sets one field of one line (1-based, the header is line 1)."""
+
+    def edit(text):
+        lines = text.splitlines()
+        header = lines[0].split(",")
+        fields = lines[line_number - 1].split(",")
+        fields[header.index(column)] = value
+        lines[line_number - 1] = ",".join(fields)
+        return "\n".join(lines) + "\n"
+
+    return edit
+
+
+SINGLE_WHEEL_CASES = [
+    (
+        dict(edit=_replace_field(5, "fx_N", "n/a")),
+        "smooth_wheel.csv: line 5 (data row 4), column 'fx_N': 'n/a' is not a finite number",
+    ),
+    (
+        dict(edit=lambda t: t.replace("fz_N,", "force_z,", 1)),
+        "smooth_wheel.csv: missing column(s) fz_N",
+    ),
+    # Cut in the middle of row 30: the last line is short.
+    (
+        dict(edit=lambda t: t[: t.index("\n", sum(len(x) + 1 for x in t.splitlines()[:30])) - 40]),
+        "smooth_wheel.csv: line 31 (data row 30): 17 field(s), the header has 22 (is the file",
+    ),
+    # Cut after row 40: whole rows are missing (the 75 deg rows among them).
+    (
+        dict(edit=lambda t: "\n".join(t.splitlines()[:41]) + "\n"),
+        "smooth_wheel.csv: no usable row at slip angle 75 deg (needed for the extrapolation",
+    ),
+    (dict(drop_grousered=True), "single-wheel data not found: "),
+]
+
+
+@pytest.mark.parametrize("files, message", SINGLE_WHEEL_CASES)
+def test_validate_single_wheel_bad_files_are_one_line_before_any_compile(
+    tmp_path, capsys, monkeypatch, files, message
+):
+    """Every data file is read and checked before the first calibration (minutes): a
+    malformed or truncated file, or a missing one, is one line and exit status 2."""
+    from snowjax._validate import single_wheel
+
+    def must_not_run(*args, **kwargs):
+        raise AssertionError("the calibration started before the files were checked")
+
+    monkeypatch.setattr(single_wheel, "single_wheel_study", must_not_run)
+    folder = _single_wheel_folder(tmp_path, **files)
+    argv = ["validate", "--single-wheel", str(folder), "--out", str(tmp_path / "out")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message in err
+    assert "Traceback" not in err
+    assert len(err.strip().splitlines()) == 1

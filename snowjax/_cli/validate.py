@@ -83,12 +83,19 @@ def run(args) -> int:
     if width is not None and not (math.isfinite(width) and 0 < width < 2):
         return _fail(f"--tyre-width must be in (0, 2) metres, got {width}")
     single = getattr(args, "single_wheel", None)
-    if single is not None and not (pathlib.Path(single) / "smooth_wheel.csv").is_file():
-        return _fail(f"--single-wheel: no smooth_wheel.csv in {single}")
     try:
         args.out = _output_dir(str(args.out))
     except ValueError as err:
         return _fail(str(err))
+    if single is not None:
+        # Both data files are read and checked before JAX compiles anything.
+        from .._validate.single_wheel import check_study_rows, load_single_wheel
+
+        try:
+            for wheel in ("smooth", "grousered"):
+                check_study_rows(load_single_wheel(single, wheel))
+        except (OSError, ValueError) as err:
+            return _fail(f"--single-wheel: {err}")
 
     import jax
 

@@ -101,20 +101,23 @@ def _blocks(n: int):
         yield a, min(a + _BLOCK, n)
 
 
-def _check_parameter_sets(template, leaves, rules_of, label, where, slips=None, grid=True):
+def _check_parameter_sets(
+    template, leaves, rules_of, label, where, slips=None, grid=True, widths=None
+):
     """Check the leaves of a terrain / distribution with its own `constraints`, by blocks.
 
     `leaves`: {field path: scalar or 1-D array} (1-D ones of a common length);
     `rules_of(obj, slip)` returns the object's (name, value, ok, allowed) rules.  A
     distribution's rules depend on the slip: `slips` are then the sweep's slips, every
-    slip with every parameter set (grid) or zipped with the rows (list).
+    slip with every parameter set (grid) or zipped with the rows (list).  A terrain's
+    rules that involve the wheel width b: `widths` (scalar or 1-D, aligned with the
+    leaves), passed as `rules_of(obj, width)`.
     """
-    size = max([x.size for x in leaves.values()] + [1 if slips is None or grid else slips.size])
+    sizes = [x.size for x in leaves.values()] + [1 if widths is None else widths.size]
+    size = max(sizes + [1 if slips is None or grid else slips.size])
+    cut = lambda x: x.reshape(-1)[a:b] if x.size > 1 else x.reshape(-1)[:1]  # noqa: E731
     for a, b in _blocks(size):
-        block = {
-            f: np.asarray(x.reshape(-1)[a:b] if x.size > 1 else x.reshape(-1)[:1], dtype=float)
-            for f, x in leaves.items()
-        }
+        block = {f: np.asarray(cut(x), dtype=float) for f, x in leaves.items()}
         slip: np.ndarray | None = None
         if slips is not None:
             flat = np.asarray(slips, dtype=float).reshape(-1)
@@ -125,7 +128,7 @@ def _check_parameter_sets(template, leaves, rules_of, label, where, slips=None, 
                 slip = flat[a:b] if flat.size > 1 else flat
         obj = _with_leaves(template, block)
         with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-            rules = rules_of(obj, slip)
+            rules = rules_of(obj, slip if widths is None else np.asarray(cut(widths), float))
         for name, value, ok, allowed in rules:
             value = np.asarray(value, dtype=float)
             good = np.isfinite(value) & np.asarray(ok)
@@ -138,6 +141,8 @@ def _check_parameter_sets(template, leaves, rules_of, label, where, slips=None, 
             got = float(value[tuple(bad)]) if shape else float(value)
             if shape and size > 1:
                 at = f" at index {a + int(bad[0])}"
+                if widths is not None and grid:
+                    at = f" at parameter set {a + int(bad[0])}"
                 if slip is not None and grid:
                     at = f" at parameter set {a + int(bad[0])}, slip {float(slip[0, bad[1]])!r}"
             elif shape and slip is not None and grid and slip.size > 1:
@@ -376,7 +381,14 @@ def _define(
             )
         shape = (next(iter(lengths.values()), 1),)
     # The terrain's and the distribution's own validity rules (those of solve_wheel).
-    _check_parameter_sets(terrain_t, terrain_leaves, lambda t, _: t.constraints(shear), "", "snow")
+    _check_parameter_sets(
+        terrain_t,
+        terrain_leaves,
+        lambda t, width: [*t.constraints(shear), *t.wheel_constraints(width)],
+        "",
+        "snow",
+        widths=wheel_leaves["width"],
+    )
     if dist_t is not None:
         _check_parameter_sets(
             dist_t,

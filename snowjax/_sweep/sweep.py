@@ -603,6 +603,12 @@ def _compute(d, devices, out, todo, total, on_disk, progress, tag, callback, wor
     return time.perf_counter() - t0
 
 
+def rate_text(rate: float) -> str:
+    """A rate for people: thousands separated above 100, three significant digits below
+    (a sweep of a few points runs at a few points per second, compile included)."""
+    return f"{rate:,.0f}" if rate >= 100 else f"{rate:.3g}"
+
+
 @contextlib.contextmanager
 def _progress_bar(show: bool, total: int, done: int):
     if not show:
@@ -630,7 +636,7 @@ def _progress_bar(show: bool, total: int, done: int):
 
         def advance(rate: float, completed: int | None = None) -> None:
             """One more chunk done, or `completed` chunks done in all."""
-            text = f"{rate:,.0f} points/s"
+            text = f"{rate_text(rate)} points/s"
             if completed is None:
                 prog.update(task, advance=1, rate=text)
             else:

@@ -101,6 +101,49 @@ class SingleWheelData:
         return self.in_range & np.isin(np.round(self.slip_angle_deg), list(angles_deg))
 
 
+COLUMNS = ("slip_ratio", "slip_angle_deg", "slip_angle_rad", "rim_speed_m_s",
+           "travel_speed_m_s", "fx_N", "fy_N", "fz_N", "sinkage_m", "fx_std_N", "fy_std_N",
+           "sinkage_std_m")  # fmt: skip
+
+
+def _read_rows(path: pathlib.Path) -> list[dict[str, float]]:
+    """The rows of a data file as numbers; ValueError naming the file, line and column of
+    the first malformed row (a missing column, a short or long row, a value that is not a
+    finite number)."""
+    with path.open(newline="", encoding="utf-8") as fh:
+        reader = csv.reader(fh)
+        header = next(reader, None)
+        if header is None:
+            raise ValueError(f"{path}: the file is empty")
+        missing = [c for c in COLUMNS if c not in header]
+        if missing:
+            raise ValueError(f"{path}: missing column(s) {', '.join(missing)}")
+        where = {c: header.index(c) for c in COLUMNS}
+        rows = []
+        for fields in reader:
+            line = f"{path}: line {reader.line_num} (data row {len(rows) + 1})"
+            if not fields:
+                continue
+            if len(fields) != len(header):
+                raise ValueError(
+                    f"{line}: {len(fields)} field(s), the header has {len(header)}"
+                    " (is the file truncated?)"
+                )
+            row = {}
+            for c, k in where.items():
+                try:
+                    value = float(fields[k])
+                except ValueError:
+                    value = math.nan
+                if not math.isfinite(value):
+                    raise ValueError(f"{line}, column '{c}': {fields[k]!r} is not a finite number")
+                row[c] = value
+            rows.append(row)
+    if not rows:
+        raise ValueError(f"{path}: no data rows")
+    return rows
+
+
 def load_single_wheel(folder, wheel: str = "smooth") -> SingleWheelData:
     """Read `smooth_wheel.csv` or `grousered_wheel.csv` from `folder`.
 
@@ -110,22 +153,16 @@ def load_single_wheel(folder, wheel: str = "smooth") -> SingleWheelData:
     **Returns:** `SingleWheelData` (63 rows).
 
     **Raises:** `FileNotFoundError` naming the missing file; `ValueError` for an unknown
-    wheel or a file without the expected columns.
+    wheel, or naming the file, line and column of a missing column, a row with too few or
+    too many fields, or a value that is not a finite number.
     """
     if wheel not in SHEARING_RADIUS:
         raise ValueError(f"wheel must be 'smooth' or 'grousered', got {wheel!r}")
     path = pathlib.Path(folder) / f"{wheel}_wheel.csv"
     if not path.is_file():
         raise FileNotFoundError(f"single-wheel data not found: {path}")
-    with path.open(newline="", encoding="utf-8") as fh:
-        rows = list(csv.DictReader(fh))
-    need = ("slip_ratio", "slip_angle_deg", "slip_angle_rad", "rim_speed_m_s",
-            "travel_speed_m_s", "fx_N", "fy_N", "fz_N", "sinkage_m", "fx_std_N",
-            "fy_std_N", "sinkage_std_m")  # fmt: skip
-    missing = [c for c in need if not rows or c not in rows[0]]
-    if missing:
-        raise ValueError(f"{path}: missing column(s) {missing}")
-    col = lambda c: np.array([float(r[c]) for r in rows])  # noqa: E731
+    rows = _read_rows(path)
+    col = lambda c: np.array([r[c] for r in rows])  # noqa: E731
     radius = SHEARING_RADIUS[wheel]
     beta = col("slip_angle_rad")
     rim = col("rim_speed_m_s") * radius / RIG_RADIUS
@@ -153,6 +190,23 @@ def load_single_wheel(folder, wheel: str = "smooth") -> SingleWheelData:
         sinkage_std=col("sinkage_std_m"),
         in_range=in_range,
     )
+
+
+# The slip angles [deg] of each group of `single_wheel_study`'s defaults.
+STUDY_ANGLES = {"fit": (0, 30, 60), "held_out": (15, 45), "extrapolation": (75,)}
+
+
+def check_study_rows(data: SingleWheelData, angles=STUDY_ANGLES) -> None:
+    """ValueError naming the file and the slip angle if a group of the study has no
+    in-range row at one of its angles (a truncated file would otherwise give NaN RMS)."""
+    for group, group_angles in angles.items():
+        for angle in group_angles:
+            if not data.rows((angle,)).any():
+                raise ValueError(
+                    f"{data.wheel}_wheel.csv: no usable row at slip angle {angle} deg (needed"
+                    f" for the {group.replace('_', '-')} rows; the file has"
+                    f" {data.fz.shape[0]} rows, the published one 63: is it truncated?)"
+                )
 
 
 @dataclasses.dataclass(frozen=True)
@@ -206,9 +260,9 @@ def _rms(pred, measured, mask) -> float:
 
 def single_wheel_study(
     data: SingleWheelData,
-    fit_angles=(0, 30, 60),
-    predict_angles=(15, 45),
-    extrapolate_angles=(75,),
+    fit_angles=STUDY_ANGLES["fit"],
+    predict_angles=STUDY_ANGLES["held_out"],
+    extrapolate_angles=STUDY_ANGLES["extrapolation"],
     max_steps: int = 60,
 ) -> SingleWheelStudy:
     """Calibrate `BekkerSoil` + `WongReece` + `Lateral` on `fit_angles` with `fit_wheel`
@@ -221,7 +275,11 @@ def single_wheel_study(
     bulldozing unit weight (1330 kg/m^3 x g, the measured bulk density).
 
     **Returns:** `SingleWheelStudy`; RMS errors are model - data over the named rows.
+
+    **Raises:** `ValueError` if one of the angles has no in-range row (`check_study_rows`).
     """
+    angles = {"fit": fit_angles, "held_out": predict_angles, "extrapolation": extrapolate_angles}
+    check_study_rows(data, angles)
     wheel = RigidWheel(2 * data.radius, data.width)
     terrain, dist = _start()
     sel = data.rows(fit_angles)
@@ -250,7 +308,6 @@ def single_wheel_study(
     predicted["fy"][rows] = np.asarray(st.lateral_force)
     predicted["sinkage"][rows] = np.asarray(st.sinkage)
     status[rows] = np.asarray(st.status)
-    angles = {"fit": fit_angles, "held_out": predict_angles, "extrapolation": extrapolate_angles}
     rms, excluded = {}, {}
     for group, group_angles in angles.items():
         mask = data.rows(group_angles)
@@ -336,14 +393,22 @@ def single_wheel_figure(study: SingleWheelStudy, path) -> pathlib.Path:
 def write_single_wheel(out, folder, progress: bool = False) -> list[pathlib.Path]:
     """Run `single_wheel_study` on both wheels in `folder` and write
     `single_wheel.md` (the RMS table), `single_wheel_<wheel>.png` and
-    `single_wheel_predictions.csv` to `out`.  Returns the written paths."""
+    `single_wheel_predictions.csv` to `out`.  Returns the written paths.
+
+    Both data files are read and checked first (`load_single_wheel`, `check_study_rows`):
+    a missing or malformed file raises `FileNotFoundError` / `ValueError` before anything
+    is computed."""
     out = pathlib.Path(out)
+    # Both files are read and checked before the first (minutes-long) calibration.
+    data = {wheel: load_single_wheel(folder, wheel) for wheel in ("smooth", "grousered")}
+    for d in data.values():
+        check_study_rows(d)
     out.mkdir(parents=True, exist_ok=True)
     studies, files = [], []
-    for wheel in ("smooth", "grousered"):
+    for wheel, d in data.items():
         if progress:
             print(f"calibrating the {wheel} wheel (bulldozing off and on) ...", flush=True)
-        st = single_wheel_study(load_single_wheel(folder, wheel))
+        st = single_wheel_study(d)
         studies.append(st)
         files.append(single_wheel_figure(st, out / f"single_wheel_{wheel}.png"))
     table = out / "single_wheel.md"
