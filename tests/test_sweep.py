@@ -516,3 +516,57 @@ def test_parameter_sweep_notebook(background):
     counts = dict(re.findall(r"^(\w+): (\d+) points$", text, flags=re.M))
     assert int(counts["CONVERGED"]) > 0 and sum(map(int, counts.values())) == 48, counts
     assert (background.notebook_dir / "sweep-output" / "sweep.csv").exists()
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_distributed_sweep_whose_peer_dies_ends_in_one_line(tmp_path):
+    """Two `--distributed` processes on this machine (loopback); process 1 dies (its whole
+    process group is killed) once process 0 has written a chunk.  JAX's distributed
+    service then aborts process 0 (SIGABRT, a C++ stack trace) when the heartbeats stop
+    (`--heartbeat-timeout 5`): the user sees one line saying so and how to resume."""
+    import signal
+    import time
+
+    out = tmp_path / "out"
+    port = _free_port()
+    main_code = "import sys; from snowjax._cli.app import main; sys.exit(main())"
+
+    def start(k):
+        argv = ["sweep", "--loads", "1000:8000:600", "--slips", "0:0.9:600", "--chunk-size",
+                "6000", "--out", str(out), "--no-progress", "--distributed", "--coordinator",
+                f"127.0.0.1:{port}", "--num-processes", "2", "--process-id", str(k),
+                "--heartbeat-timeout", "5"]  # fmt: skip
+        return subprocess.Popen(
+            [sys.executable, "-c", main_code, *argv],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            start_new_session=True,
+        )
+
+    first, second = start(0), start(1)
+    try:
+        deadline = time.monotonic() + 240
+        while not list(out.glob("chunk_*.npz")) and time.monotonic() < deadline:
+            assert first.poll() is None and second.poll() is None, "a process ended early"
+            time.sleep(0.1)
+        os.killpg(second.pid, signal.SIGKILL)
+        _, err = first.communicate(timeout=240)
+    finally:
+        for proc in (first, second):
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+    assert first.returncode == 1
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "another process of the run died or stopped answering" in lines[0]
+    assert "run the same command again on every process to resume" in lines[0]
+    # JAX's own report (and its stack trace) is kept in the log the line names.
+    assert "distributed service" in (out / ".sweep.process0.log").read_text()

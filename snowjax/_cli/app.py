@@ -59,6 +59,7 @@ def main(argv: list[str] | None = None) -> int:
     for module in _SUBCOMMANDS:
         module.register(sub)
     args = parser.parse_args(_attach_negative_values(sys.argv[1:] if argv is None else argv))
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # to run it again (sweep)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         return int(args.run(args))

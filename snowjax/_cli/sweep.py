@@ -164,6 +164,14 @@ def register(sub) -> None:
     p.add_argument("--coordinator", default=None, help="with --distributed: host:port of process 0")
     p.add_argument("--num-processes", type=int, default=None, help="with --distributed")
     p.add_argument("--process-id", type=int, default=None, help="with --distributed")
+    p.add_argument(
+        "--heartbeat-timeout",
+        type=int,
+        default=None,
+        metavar="SECONDS",
+        help="with --distributed: a process that sends no heartbeat for this long is taken"
+        " as dead and the run is stopped (default: JAX's, 100 s)",
+    )
     p.set_defaults(run=run)
 
 
@@ -395,7 +403,8 @@ def _unused_options(args) -> None:
             " lists point by point); use one of them"
         )
     cluster = [f"--{o}" for o, v in (("coordinator", args.coordinator),
-               ("num-processes", args.num_processes), ("process-id", args.process_id))
+               ("num-processes", args.num_processes), ("process-id", args.process_id),
+               ("heartbeat-timeout", args.heartbeat_timeout))
                if v is not None]  # fmt: skip
     if cluster and not args.distributed:
         verb = "applies" if len(cluster) == 1 else "apply"
@@ -406,6 +415,68 @@ def _unused_options(args) -> None:
         )
 
 
+# Set in the environment of the child process that `_supervised` runs a distributed
+# sweep in.
+SUPERVISED = "SNOWJAX_SWEEP_SUPERVISED"
+
+
+def _supervised(args) -> int:
+    """Run this process's part of a distributed sweep in a child process; report how it
+    ended in one line.
+
+    JAX's distributed service stops every process of a run when one of them dies or stops
+    answering (no heartbeat for `--heartbeat-timeout` seconds, also at the shutdown
+    barrier after the last chunk): it aborts them (SIGABRT) with a C++ stack trace.  The
+    child's stderr goes to `OUT/.sweep.process<k>.log`; its own one-line messages are
+    passed on, a crash becomes one line saying what happened and how to resume.
+    """
+    import os
+    import signal
+    import subprocess
+
+    out = pathlib.Path(args.out)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        print(f"snowjax sweep: error: --out {out}: {err.strerror or err}", file=sys.stderr)
+        return 2
+    who = "this process" if args.process_id is None else f"process {args.process_id}"
+    log = out / f".sweep.process{'' if args.process_id is None else args.process_id}.log"
+    main = "import sys; from snowjax._cli.app import main; sys.exit(main())"
+    command = [sys.executable, "-c", main, *args.argv]
+    with log.open("w", encoding="utf-8") as err:
+        child = subprocess.Popen(command, stderr=err, env={**os.environ, SUPERVISED: "1"})
+        # A SIGTERM to this process stops the child too (SIGINT reaches both already).
+        signal.signal(signal.SIGTERM, lambda *_: child.terminate())
+        try:
+            status = child.wait()
+        except KeyboardInterrupt:  # the child got the same SIGINT: let it save and stop
+            status = child.wait()
+    text = log.read_text(encoding="utf-8", errors="replace")
+    own = [line for line in text.splitlines() if line.startswith("snowjax sweep:")]
+    if status >= 0 and own:
+        print("\n".join(own), file=sys.stderr)
+        return status
+    if status == 0:
+        return 0
+    if "distributed service detected fatal errors" in text or "heartbeat" in text:
+        why = (
+            "JAX's distributed service stopped it because another process of the run died"
+            " or stopped answering"
+        )
+    elif status < 0:
+        why = f"it was stopped by {signal.Signals(-status).name}"
+    else:
+        why = f"it failed with exit status {status}"
+    print(
+        f"snowjax sweep: error: {who} of the distributed sweep ended: {why}; the chunks"
+        f" written so far are kept in {out}: run the same command again on every process"
+        f" to resume (log: {log})",
+        file=sys.stderr,
+    )
+    return 1
+
+
 def run(args) -> int:
     try:
         _unused_options(args)
@@ -413,17 +484,31 @@ def run(args) -> int:
             raise ValueError(f"--chunk-size must be a positive integer, got {args.chunk_size}")
         if not args.out.strip():
             raise ValueError("--out must name a directory, got ''")
+        if args.heartbeat_timeout is not None and args.heartbeat_timeout < 1:
+            raise ValueError(f"--heartbeat-timeout must be >= 1 s, got {args.heartbeat_timeout}")
+    except ValueError as err:
+        print(f"snowjax sweep: error: {err}", file=sys.stderr)
+        return 2
+    import os
+
+    if args.distributed and os.environ.get(SUPERVISED) != "1":
+        return _supervised(args)
+    try:
         import jax
         import numpy as np
 
         jax.config.update("jax_enable_x64", not args.float32)
         if args.distributed:
+            heartbeat = {}
+            if args.heartbeat_timeout is not None:
+                heartbeat["heartbeat_timeout_seconds"] = args.heartbeat_timeout
             jax.distributed.initialize(
                 coordinator_address=args.coordinator,
                 num_processes=args.num_processes,
                 process_id=args.process_id,
+                **heartbeat,
             )
-        from .._sweep.sweep import sweep
+        from .._sweep.sweep import rate_text, sweep
 
         wheel, snow, distribution, loads, slips, formats = _build(args)
         n_sets = max([1, *(np.size(x) for x in jax.tree_util.tree_leaves((wheel, snow)))])
@@ -471,7 +556,7 @@ def run(args) -> int:
         f"snowjax sweep: {r.n_points:,} points in {r.n_chunks} chunk(s) of {r.chunk_size}"
         f" ({r.computed_chunks} computed, {r.skipped_chunks} already on disk or another"
         f" process's) in {r.elapsed_s:.1f} s"
-        + (f", {r.points_per_second:,.0f} points/s" if r.computed_chunks else "")
+        + (f", {rate_text(r.points_per_second)} points/s" if r.computed_chunks else "")
     )
     if r.complete:
         for path in [*r.files.values()] or [r.out]:
