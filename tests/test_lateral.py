@@ -252,8 +252,11 @@ def test_gradients_wrt_every_leaf_match_central_differences():
     flat, tree = jax.tree_util.tree_flatten(params)
     flat_jac = jax.tree_util.tree_leaves(jac)
     flat_rev = jax.tree_util.tree_leaves(jac_rev)
+    # Strongly typed float64 leaves (the modules' converters make weakly typed ones): one
+    # compiled `f` serves every perturbed copy instead of one per leaf.
+    flat = [jnp.asarray(x, jnp.float64) for x in flat]
     f = jax.jit(outputs)
-    scale = np.abs(np.asarray(f(params)))
+    scale = np.abs(np.asarray(f(jax.tree_util.tree_unflatten(tree, flat))))
     for k, x in enumerate(flat):
         h = 1e-6 * max(abs(float(x)), 1e-3)
 
