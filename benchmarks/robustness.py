@@ -4,6 +4,14 @@
     python benchmarks/robustness.py --cases 100000  # quicker
     python benchmarks/robustness.py --no-readme
 
+Then the any-terrain families (`--terrain-cases`, default 100,000 each): every terrain law
+(Wong snow on the general quadrature, Bekker, Reece, layered snow), the front region and
+Wong–Reece, straight running and slip angles up to 60 degrees with and without sidewall
+bulldozing (`tests/random_cases.py`, the ranges of the property tests; a tenth of the cases
+rest on the base with the braking sign change of the shear displacement at the axle), in
+float64 and float32: statuses, non-finite fields outside INVALID_INPUT, the load balance of
+the straight families, and the float32 sinkage error.
+
 Random in-range cases (`benchmarks/cases.py`: WongSnow front region, slips -0.5 to 0.99,
 so about a third brake), every shear model, float64 and float32.  Per shear model and
 per family (driving: slip >= 0, braking: slip < 0) it reports the statuses, the number
@@ -38,6 +46,7 @@ from rich.progress import track  # noqa: E402
 
 import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402
+from tests.random_cases import KINDS, UNIT_ROWS, any_terrain_inputs  # noqa: E402
 
 SHEARS = ("classic", "simplified", "none")
 FIELDS = ("entry_angle", "sinkage", "motion_resistance", "thrust", "drawbar_pull", "torque")
@@ -127,9 +136,73 @@ def scipy_check(n, shear):
     return worst_w, worst_z
 
 
+# (label, distribution, slip angle, bulldozing) of the any-terrain families.
+ANY_FAMILIES = (
+    ("front region", False, False, False),
+    ("Wong–Reece", True, False, False),
+    ("front region, slip angle, bulldozing", False, True, True),
+    ("Wong–Reece, slip angle", True, True, False),
+)
+ALL_FIELDS = (*FIELDS, "lateral_force", "aligning_torque")
+
+
+def any_terrain_family(kind, family, n, seed=13):
+    """Statuses and checks of one any-terrain family: a row of the second table."""
+    label, wong_reece, steered, bulldozing = family
+    rng = np.random.default_rng(seed)
+    unit, corner = rng.uniform(size=(UNIT_ROWS, n)), rng.uniform(size=n) < 0.1
+    states = {}
+    for dtype in (np.float64, np.float32):
+        wheel, terrain, dist, lateral, load, slip, beta = any_terrain_inputs(
+            kind, unit, corner, dtype
+        )
+        lateral = sj.Lateral(lateral.shear_modulus, lateral.unit_weight, bulldozing=bulldozing)
+        parts = []
+        for k in range(0, n, CHUNK):
+            take = lambda t, k=k: jax.tree_util.tree_map(lambda x: x[k : k + CHUNK], t)  # noqa: E731
+            st = sj.solve_wheel(
+                take(wheel), take(terrain), load[k : k + CHUNK], slip[k : k + CHUNK],
+                distribution=take(dist) if wong_reece else None,
+                slip_angle=beta[k : k + CHUNK] if steered else None, lateral=take(lateral),
+            )  # fmt: skip
+            parts.append({f: np.asarray(getattr(st, f)) for f in (*ALL_FIELDS, "status")})
+        states[dtype] = {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
+        if dtype == np.float64:
+            inputs64 = (wheel, terrain, dist, load, slip)
+    st64, st32 = states[np.float64], states[np.float32]
+    counts = [int(np.sum(st64["status"] == s)) for s in (0, 1, 4, 3, 2)]
+
+    def non_finite(st):
+        bad = np.zeros(n, bool)
+        for f in ALL_FIELDS:
+            bad |= ~np.isfinite(st[f])
+        return int(np.sum(bad & (st["status"] != Status.INVALID_INPUT)))
+
+    conv = st64["status"] == Status.CONVERGED
+    worst = "—"
+    if not steered:  # W re-evaluated by contact_forces at the returned entry angle
+        wheel, terrain, dist, load, slip = inputs64
+        th = np.where(conv, st64["entry_angle"], 0.1)
+        w = sj.contact_forces(
+            wheel, terrain, th, slip, distribution=dist if wong_reece else None
+        ).vertical_load
+        worst = f"{np.max(np.abs(np.asarray(w)[conv] / load[conv] - 1)):.1e}"
+    both = conv & (st32["status"] == Status.CONVERGED)
+    rel = np.abs(st32["sinkage"][both] / st64["sinkage"][both] - 1)
+    q = np.quantile(rel, [0.5, 0.999]) if rel.size else [np.nan, np.nan]
+    return (
+        f"| {kind} | {label} | {n:,} | {counts[0]:,} | {counts[1]:,} | {counts[2]:,} |"
+        f" {counts[3]:,} | {counts[4]:,} | {non_finite(st64)} / {non_finite(st32)} | {worst} |"
+        f" {q[0]:.1e} / {q[1]:.1e} / {np.max(rel) if rel.size else np.nan:.1e} |"
+    )
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=1_000_000, help="cases per shear model")
+    parser.add_argument(
+        "--terrain-cases", type=int, default=100_000, help="cases per any-terrain family"
+    )
     parser.add_argument("--no-readme", action="store_true")
     args = parser.parse_args(argv)
     console = Console()
@@ -189,8 +262,27 @@ def main(argv=None):
         " max sinkage difference (driving; braking W can have several roots): "
         + "; ".join(refs)
         + ".",
+    ]
+    m = args.terrain_cases
+    lines += [
+        "",
+        f"Any-terrain path: {m:,} random cases per family (`tests/random_cases.py`: slips"
+        " -0.5 to 0.99, slip angles up to 60 degrees, a tenth resting on the base with the"
+        " braking sign change at the axle), classic shear, float64 and float32 (Wong snow on"
+        " the front region without a slip angle takes the first table's quadrature).",
+        "",
+        "| terrain | family | cases | converged | bottomed out | angle limit | not converged"
+        " | invalid | non-finite outside INVALID_INPUT (f64 / f32) | max balance |"
+        " float32 sinkage error (median / 99.9 % / max) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    jobs = [(kind, family) for kind in KINDS for family in ANY_FAMILIES]
+    for kind, family in track(jobs, description="any terrain", console=console):
+        lines.append(any_terrain_family(kind, family, m))
+    lines += [
+        "",
         f"* Measured {time.strftime('%Y-%m-%d')} with `python benchmarks/robustness.py"
-        f" --cases {n}`.",
+        f" --cases {n} --terrain-cases {m}`.",
     ]
     text = "\n".join(lines)
     console.print(text)
