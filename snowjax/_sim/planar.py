@@ -49,9 +49,11 @@ velocity (V cos beta, -V sin beta) turns clockwise from its heading, so that the
 force of `solve_wheel` (positive for beta > 0) opposes the side-slip.  A wheel sliding
 sideways at v_x -> 0 has beta -> +-90 degrees; the clip keeps `tan(beta)` finite there,
 where the lateral shear is fully mobilised anyway.  As in the longitudinal simulation
-the force along the heading is the thrust minus `psi(d v_x / (2 speed_eps))` times the
-motion resistance (`psi` odd, C^1 and +-1 outside the band): the compaction resistance
-opposes the wheel's motion along its heading, also when the wheel spins against it.
+the force along the heading is the thrust minus psi times the motion resistance, psi in
+[-1, 1] the direction of the wheel's motion along its heading (`snowjax.wheel_kinematics`;
++-1 outside a band of width 2 `speed_eps` about v_x = 0, and 1 for a braked wheel): the
+compaction resistance opposes the wheel's motion along its heading, also when the wheel
+spins against it.
 
 **Start from rest (regularisation).**  The longitudinal forces (drawbar pull, M_w) carry
 the factor of `snowjax.wheel_kinematics`, `phi(|v_x + omega r_w| / (2 speed_eps))` with

@@ -164,9 +164,11 @@ def wheel_kinematics(
       1))^2`, the factor on both contact forces: 0 at rest, 1 as soon as
       `|v + omega r| >= 2 speed_eps`, C^1 in between.  The forces of `wheel_forces` are
       `d * factor * (thrust - psi * motion resistance, M_w)` at this slip, with
-      d = sign(v + omega r) and psi the direction of the axle's motion in the mirrored
-      frame, `psi(d v / (2 speed_eps))`, `psi(s) = 2 s_c - s_c |s_c|`, `s_c = clip(s,
-      -1, 1)`: the compaction resistance opposes the axle's motion, also where the
+      d = sign(v + omega r) and psi in [-1, 1] the direction of the axle's motion in
+      the mirrored frame (v' = d v, omega' = d omega): `psi = a + (1 - a) b`,
+      `a = 2 s - s |s|`, `s = clip(v' / (2 speed_eps), -1, 1)`, b the smoothstep of
+      `clip(2 v' / (omega' r) - 1, 0, 1)` (b = 1 for a rim at rest or turning
+      backwards): the compaction resistance opposes the axle's motion, also where the
       axle moves against the rim (slip above 1, held at 1).
 
     **Arguments:** `speed` v [m/s], `wheel_speed` omega [rad/s], `radius` r = D/2 [m],
