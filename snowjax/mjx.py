@@ -70,9 +70,11 @@ wheel (the drive torques' reaction and the snow's resisting torques pitch it bac
 front wheels slip more than the rear ones.  With the default (static load, no transfer)
 all four run at the 18.3 % slip `simulate_longitudinal` gives.
 
-**Lateral force.**  The rigid-wheel model gives no lateral force: `MjxWheelForces.slip_angle`
-is reported but nothing is applied sideways, so use it on vehicles whose lateral motion
-is constrained (the shipped model is planar: x, z, pitch) or add your own lateral force.
+**Lateral force.**  This bridge applies no lateral force: `solve_wheel`'s lateral force and
+aligning torque (`slip_angle=`, `snowjax.Lateral`, used by `simulate_planar`) are not wired
+in here.  `MjxWheelForces.slip_angle` is reported but nothing is applied sideways, so use
+it on vehicles whose lateral motion is constrained (the shipped model is planar: x, z,
+pitch) or add your own lateral force.
 """
 
 from __future__ import annotations
