@@ -380,19 +380,6 @@ def _solve_step(step, y0, solver, options=None, p_w=SNOW.p_w):
     )
 
 
-def _num_equations(jaxpr):
-    """Equations of a jaxpr, those of its sub-jaxprs (loops, branches, calls) included."""
-    count = 0
-    for eqn in jaxpr.eqns:
-        count += 1
-        for param in eqn.params.values():
-            for sub in param if isinstance(param, tuple | list) else (param,):
-                inner = getattr(sub, "jaxpr", sub)
-                if hasattr(inner, "eqns"):
-                    count += _num_equations(inner)
-    return count
-
-
 def test_diffrax_implicit_euler_cannot_replace_the_warm_start_step():
     """`diffrax.ImplicitEuler` with optimistix's Newton, under the simulation's step-size
     controller, keeps a step whose root find failed: coasting from 3 m/s, where
@@ -424,67 +411,24 @@ def test_diffrax_implicit_euler_cannot_replace_the_warm_start_step():
     assert solver.init(term, ts[0], ts[1], COASTING, None) is None
 
 
-@pytest.mark.slow
 def test_optimistix_root_finders_cannot_replace_the_damped_newton():
-    """The coasting vehicle's first implicit step (stiff, on the S-shaped torque–slip
-    curve): `_LevenbergMarquardt` solves it; `optx.Newton`, undamped, does not in 100
-    iterations; `optx.LevenbergMarquardt` and `optx.Dogleg` raise on their first step
-    (with their default forward-mode Jacobian they apply a zero placeholder
-    linearisation, on which the implicit JVP of `solve_wheel`'s own root find raises)."""
-    step = _implicit_step(COASTING, 0.0)
-    ours = _solve_step(step, COASTING, _LevenbergMarquardt(rtol=TOL, atol=TOL))
+    """Why `_sim/levenberg_marquardt.py` exists (runs in `make test`, so that the reason
+    cannot expire unseen): the first implicit step from rest under 545 N m per wheel (the
+    regularised forces' kink at rest).  `_LevenbergMarquardt` solves it (16 iterations);
+    optimistix's `LevenbergMarquardt` and `Dogleg` do not in 100 (measured with optimistix
+    0.1.0: residual 18 and 0.4; they converge on coasting, driving and braking steps,
+    `LevenbergMarquardt` with 3x the iterations when driving).  `optx.Newton`, undamped,
+    fails here too (and see the diffrax test above).  Before optimistix 0.1.0 both damped
+    solvers raised on their first step instead; a raise counts as a failure here too."""
+    rest = jnp.zeros(4)
+    step = _implicit_step(rest, 545.0)
+    ours = _solve_step(step, rest, _LevenbergMarquardt(rtol=TOL, atol=TOL))
     assert ours.result == optx.RESULTS.successful
     assert float(jnp.max(jnp.abs(step(ours.value, SNOW.p_w)))) < TOL
-    newton = _solve_step(step, COASTING, optx.Newton(rtol=TOL, atol=TOL))
-    assert newton.result != optx.RESULTS.successful
     for solver in (optx.LevenbergMarquardt(rtol=TOL, atol=TOL), optx.Dogleg(rtol=TOL, atol=TOL)):
-        with pytest.raises(eqx.EquinoxRuntimeError):
-            _solve_step(step, COASTING, solver)
-
-
-@pytest.mark.slow
-def test_optimistix_reverse_mode_workaround_fails_or_costs_more():
-    """With a reverse-mode Jacobian (`options=dict(jac="bwd")`) optimistix's damped solvers
-    run, but: on a typical driving step (2 m/s, slip 0.25, 545 N m) `optx.LevenbergMarquardt`
-    takes at least twice the iterations (Jacobians) of `_LevenbergMarquardt`, and on the
-    first step from rest it stalls at rest until `max_steps` (its forward-mode derivative
-    used to raise there, before the slip's 0/0 floor was made finite), where
-    `_LevenbergMarquardt` converges with a finite derivative; `optx.Dogleg`
-    takes one iteration more, and its reverse-mode Jacobians make the
-    forward-mode-differentiated step a much larger program (measured on whole
-    simulations: twice the compile time, 1.8-2.5x the run time)."""
-    omega = 2.0 / (RADIUS * (1 - 0.25))
-    driving = jnp.array([2.0, 0.0, omega, omega])
-    step = _implicit_step(driving, 545.0)
-    ours = _LevenbergMarquardt(rtol=TOL, atol=TOL)
-    library_lm = optx.LevenbergMarquardt(rtol=TOL, atol=TOL)
-    dogleg = optx.Dogleg(rtol=TOL, atol=TOL)
-    bwd = dict(jac="bwd")
-
-    def iterations(solver, options=None):
-        sol = _solve_step(step, driving, solver, options)
-        assert sol.result == optx.RESULTS.successful
-        return int(sol.stats["num_steps"])
-
-    assert iterations(library_lm, bwd) >= 2 * iterations(ours)
-    assert iterations(dogleg, bwd) > iterations(ours)
-
-    def differentiated(y0, torque, solver, options=None):
-        step = _implicit_step(y0, torque)
-        value = lambda p_w: _solve_step(step, y0, solver, options, p_w).value  # noqa: E731
-        return lambda p_w: jax.jvp(value, (p_w,), (jnp.ones_like(p_w),))
-
-    rest = jnp.zeros(4)
-    _, tangent = differentiated(rest, 545.0, ours)(SNOW.p_w)
-    assert np.all(np.isfinite(tangent))
-    from_rest = _implicit_step(rest, 545.0)
-    assert _solve_step(from_rest, rest, ours).result == optx.RESULTS.successful
-    stalled = _solve_step(from_rest, rest, library_lm, bwd)
-    assert stalled.result != optx.RESULTS.successful
-    assert np.max(np.abs(from_rest(stalled.value, SNOW.p_w))) > 1.0
-
-    def program_size(solver, options=None):
-        jvp = differentiated(driving, 545.0, solver, options)
-        return _num_equations(jax.make_jaxpr(jvp)(SNOW.p_w).jaxpr)
-
-    assert program_size(dogleg, bwd) > 1.4 * program_size(ours)
+        try:
+            sol = _solve_step(step, rest, solver)
+        except eqx.EquinoxRuntimeError:
+            continue
+        assert sol.result != optx.RESULTS.successful, type(solver).__name__
+        assert float(jnp.max(jnp.abs(step(sol.value, SNOW.p_w)))) > 1e-2
