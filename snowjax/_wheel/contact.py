@@ -340,7 +340,7 @@ def _simplified_layout(theta0, slip, diameter, snow, z0_rel, a, entry_scale):
       grows like the cubic, much faster than its slope at the root suggests: panel 2 is
       [theta(|U0| = 40), split] (at least [split / 2, split]) and clusters at the split
       with twice the distance to |U0| = 1; panel 3 clusters at the split with four times
-      the linear scale 1 / |dU0/dtheta|, panel 4 at the entry as before.
+      the linear scale 1 / |dU0/dtheta|, panel 4 at the entry as without a split.
     - No sign change: |U0| = tau1 s (|A| + |B| s^2) grows monotonically from the entry;
       panel 4 is [theta(|U0| = 40), theta0] (at least the upper half of [theta0 / 2,
       theta0]) and clusters at theta0 with the distance to |U0| = 1 (or the entry scale,

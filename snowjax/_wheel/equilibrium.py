@@ -668,7 +668,7 @@ def solve_wheel(
       displacements mobilises Janosi–Hanamoto, capped by Mohr–Coulomb; see its
       docstring for the formulation and sources), which also changes the sinkage and
       the longitudinal forces, and `lateral_force` / `aligning_torque` are filled in.
-      `None` (default) is straight running: exactly the results of before, with
+      `None` (default) is straight running: the straight-running solver paths, with
       `lateral_force = aligning_torque = 0`; so is a concrete all-zero `slip_angle`.  A
       traced or non-zero `slip_angle` takes the any-terrain quadrature (also for
       `WongSnow` without a distribution), which at beta = 0 agrees with the straight
@@ -727,7 +727,7 @@ def solve_wheel(
     if slip_angle is not None:
         slip_angle = _numeric_argument("slip_angle", slip_angle)
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
-            # Straight running: the solver paths of before, at the broadcast shape.
+            # Straight running: the solver paths without a slip angle, at the broadcast shape.
             shape = _broadcast_shape(
                 wheel, terrain, distribution, load, slip, initial_entry_angle, slip_angle
             )

@@ -22,7 +22,7 @@ displacements, each scaled by its own shear deformation modulus (K_x the terrain
 
 so the resultant never exceeds the Mohr–Coulomb strength (2.5), each direction starts with
 its own modulus (`tau_y ~ tau_max j_y / K_y` for small displacements), and with beta = 0
-it is Janosi–Hanamoto (4.11) along the rim, as before.  This is the resultant-displacement
+it is Janosi–Hanamoto (4.11) along the rim.  This is the resultant-displacement
 formulation of the 3-D wheel model of Pavlov & Johnson (robomechanics/3d-terramechanics,
 `tau_t.m` / `tau_l.m`: magnitude from `sqrt(j_t^2 + j_l^2) / K`), and of the isotropic
 Janosi–Hanamoto law used for combined slip in Chrono's SCM.  Ishigami et al. (2007)
@@ -88,11 +88,6 @@ class Lateral(eqx.Module):
             k = self.shear_modulus
             rules.append(("lateral.shear_modulus", k, k > 0, "> 0 m"))
         return rules
-
-    @classmethod
-    def reference(cls) -> "Lateral":
-        """K_y = 0.02 m, gamma = 0 (stands in for invalid batch elements)."""
-        return cls(shear_modulus=0.02, unit_weight=0.0)
 
 
 def combined_mobilisation(a: Array, b: Array) -> tuple[Array, Array]:
