@@ -4,6 +4,7 @@ distributions (front region, Wong–Reece), against the independent SciPy refere
 import math
 import re
 
+import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -333,6 +334,37 @@ def test_infinitely_deep_terrain_gives_entry_angle_limit_not_nan():
     assert list(np.asarray(st.status)) == [Status.CONVERGED, Status.ENTRY_ANGLE_LIMIT]
     assert float(st.entry_angle[1]) == pytest.approx(math.radians(85.0))
     assert np.all(np.isfinite(st.drawbar_pull))
+
+
+def test_throw_raises_the_message_of_the_first_failed_element():
+    """`solve_wheel(..., throw=True)` raises with `Status.message` of the first failed
+    element (C order), also under `filter_jit` where only one field is kept; the default
+    (throw=False) and equilibria (BOTTOMED_OUT included) do not raise."""
+    wheel, soil = sj.RigidWheel(1.0, 0.4), sj.BekkerSoil.snow_us()
+    loads = np.array([1e3, 1e6])
+    assert [m.failed for m in Status] == [False, False, True, True, True]
+
+    def raises(status):
+        text = f"Status.{status.name}: {status.message}"
+        return pytest.raises(eqx.EquinoxRuntimeError, match=re.escape(text))
+
+    with raises(Status.ENTRY_ANGLE_LIMIT):
+        sj.solve_wheel(wheel, soil, loads, 0.2, throw=True)
+    with raises(Status.NOT_CONVERGED):
+        sj.solve_wheel(wheel, soil, loads, 0.2, max_steps=1, throw=True)
+    quiet = sj.solve_wheel(wheel, soil, loads, 0.2, max_steps=1)
+    assert list(np.asarray(quiet.status)) == [Status.NOT_CONVERGED, Status.ENTRY_ANGLE_LIMIT]
+    sinkage = eqx.filter_jit(lambda w: sj.solve_wheel(wheel, soil, w, 0.2, throw=True).sinkage)
+    with raises(Status.INVALID_INPUT):  # the first failed element, not the largest code
+        sinkage(np.array([-1.0, 1e6]))
+    with raises(Status.ENTRY_ANGLE_LIMIT):
+        sinkage(np.array([1e6, -1.0]))
+    assert np.all(np.isfinite(sinkage(np.array([1e3, 2e3]))))
+    snow = sj.WongSnow.thesis_fresh_snow()
+    heavy = sj.solve_wheel(sj.RigidWheel.thesis_tire(), snow, np.array([2e3, 5e4]), 0.2, throw=True)
+    assert list(np.asarray(heavy.status)) == [Status.CONVERGED, Status.BOTTOMED_OUT]
+    with pytest.raises(TypeError, match="throw"):
+        sj.solve_wheel(wheel, soil, loads, 0.2, throw=1)  # type: ignore[arg-type]
 
 
 def test_refused_combinations_and_bad_types():

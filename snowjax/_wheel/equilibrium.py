@@ -74,7 +74,8 @@ MAX_SLIP_ANGLE = float(np.pi / 2)
 
 
 class Status(enum.IntEnum):
-    """Outcome of the equilibrium solve, per element.
+    """Outcome of the equilibrium solve, per element; `Status.X.message` says what it
+    means (the text `solve_wheel(..., throw=True)` raises with).
 
     - `CONVERGED` (0): W(theta0) = load within tolerance (1e-8 relative in float64).
     - `BOTTOMED_OUT` (1): the load exceeds what the snow layer can carry; the wheel
@@ -87,13 +88,61 @@ class Status(enum.IntEnum):
     - `ENTRY_ANGLE_LIMIT` (4): z_w > 0.46 D and the load needs an entry angle above
       85 degrees (the wheel would be buried to its axle), outside the model's geometry;
       fields are evaluated at 85 degrees.
+
+    `CONVERGED` and `BOTTOMED_OUT` are equilibria (`Status.X.failed` is False); the other
+    three are failures.
     """
 
-    CONVERGED = 0
-    BOTTOMED_OUT = 1
-    INVALID_INPUT = 2
-    NOT_CONVERGED = 3
-    ENTRY_ANGLE_LIMIT = 4
+    message: str
+    failed: bool
+
+    def __new__(cls, value: int, failed: bool, message: str):
+        member = int.__new__(cls, value)
+        member._value_ = value
+        member.failed = failed
+        member.message = message
+        return member
+
+    CONVERGED = 0, False, "W(theta0) = load within tolerance"
+    BOTTOMED_OUT = (
+        1,
+        False,
+        "the load exceeds what the snow layer can carry: the wheel rests on the base",
+    )
+    INVALID_INPUT = (
+        2,
+        True,
+        "a non-physical or NaN input (a load <= 0, a slip outside [-1, 1], a terrain,"
+        " wheel or distribution parameter out of range); the fields are NaN",
+    )
+    NOT_CONVERGED = (
+        3,
+        True,
+        "the root finder stopped after max_steps without meeting the tolerance; the"
+        " fields hold its last iterate",
+    )
+    ENTRY_ANGLE_LIMIT = (
+        4,
+        True,
+        "the load needs an entry angle above 85 degrees (the wheel would be buried to its"
+        " axle), outside the model's geometry; the fields are evaluated at 85 degrees",
+    )
+
+
+def _throw_on_failure(state: "WheelState") -> "WheelState":
+    """`state`, with a run-time error (`eqx.branched_error_if`) carrying the message of
+    the first failed element's status (in C order) if any element failed."""
+    status = state.status.reshape(-1)
+    if status.size == 0:
+        return state
+    failed = jnp.zeros(status.shape, bool)
+    for member in Status:
+        if member.failed:
+            failed = failed | (status == member)
+    code = jnp.where(jnp.any(failed), status[jnp.argmax(failed)], Status.CONVERGED)
+    messages = [f"solve_wheel: Status.{m.name}: {m.message}" for m in Status]
+    # On every field: under `jit`, an error attached to a field the caller drops is gone.
+    return eqx.branched_error_if(state, jnp.any(failed), code, messages)
 
 
 class WheelState(eqx.Module):
@@ -626,6 +675,7 @@ def solve_wheel(
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
+    throw: bool = False,
 ) -> WheelState:
     """Sinkage-versus-slip equilibrium of a rigid wheel on snow or soil, eq. (4.14).
 
@@ -690,6 +740,12 @@ def solve_wheel(
       non-positive values fall back to half the largest admissible entry angle.  It
       carries no gradient.  For a `LayeredSnow` whose W(theta0) is not monotone, a warm
       start continues from the previous root instead of taking the shallowest one.
+    - `throw`: False (default): every element reports its outcome in `status` and the
+      rest of the batch is solved normally.  True: if any element ends
+      `INVALID_INPUT`, `NOT_CONVERGED` or `ENTRY_ANGLE_LIMIT`, raise an error carrying
+      that status's `Status.message` (of the first such element, in C order; eagerly
+      and under `jax.jit`, as `equinox.EquinoxRuntimeError`).  `BOTTOMED_OUT` is an
+      equilibrium and does not raise.
 
     **Returns:** `WheelState`.
 
@@ -716,6 +772,38 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
+    if not isinstance(throw, bool):
+        raise TypeError(f"throw must be True or False, got {throw!r}")
+    state = _solve_wheel(
+        wheel,
+        terrain,
+        load,
+        slip,
+        shear,
+        distribution,
+        slip_angle,
+        lateral,
+        nodes_per_panel,
+        max_steps,
+        initial_entry_angle,
+    )
+    return _throw_on_failure(state) if throw else state
+
+
+def _solve_wheel(
+    wheel,
+    terrain,
+    load,
+    slip,
+    shear,
+    distribution,
+    slip_angle,
+    lateral,
+    nodes_per_panel,
+    max_steps,
+    initial_entry_angle,
+) -> WheelState:
+    """`solve_wheel` without `throw`."""
     _check_model(wheel, terrain, distribution, shear)
     _check_options(nodes_per_panel, max_steps)
     load = _numeric_argument("load", load)
