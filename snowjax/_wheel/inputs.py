@@ -88,10 +88,6 @@ def _remember_checked(wheel, terrain, shear, key) -> None:
     )
 
 
-def _is_concrete(x) -> bool:
-    return not _is_traced(x)
-
-
 def _numeric_argument(name: str, value):
     """`value` as an array if it is concrete (lists and scalars accepted), else unchanged.
 
@@ -167,7 +163,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     )
     dtype = _working_dtype_of(parameter_key + _leaf_key((load, slip)), (wheel, terrain, load, slip))
     small, large = _magnitude_window(dtype)
-    to_np = lambda x: np.asarray(x) if _is_concrete(x) else x  # noqa: E731
+    to_np = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
     with np.errstate(invalid="ignore", over="ignore"):
         if known is not None:
             rules = _argument_rules(to_np(load), to_np(slip))
@@ -183,7 +179,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
 
 def _check_rules(rules, dtype, small, large) -> None:
     for name, value, ok, allowed in rules:
-        if not (_is_concrete(value) and _is_concrete(ok)):
+        if _is_traced(value) or _is_traced(ok):
             continue
         if np.ndim(value) == 0 and np.ndim(ok) == 0:  # scalars: no array round trip
             v = float(value)
