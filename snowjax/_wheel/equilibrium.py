@@ -21,7 +21,6 @@ parameters; `jax.grad` transposes the latter).
 
 from __future__ import annotations
 
-import enum
 import math
 from typing import cast
 
@@ -62,6 +61,7 @@ from .inputs import (
 )
 from .lateral import Lateral
 from .root import _implicit_root, _root_outputs
+from .status import Status, _throw_on_failure
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -71,78 +71,6 @@ MAX_ENTRY_ANGLE = float(np.deg2rad(85.0))
 # Slip angles are accepted up to (not including) 90 degrees, where the side-slip of a
 # wheel that keeps its driving slip i < 1 would need an infinite travel speed.
 MAX_SLIP_ANGLE = float(np.pi / 2)
-
-
-class Status(enum.IntEnum):
-    """Outcome of the equilibrium solve, per element; `Status.X.message` says what it
-    means (the text `solve_wheel(..., throw=True)` raises with).
-
-    - `CONVERGED` (0): W(theta0) = load within tolerance (1e-8 relative in float64).
-    - `BOTTOMED_OUT` (1): the load exceeds what the snow layer can carry; the wheel
-      rests on the base, `entry_angle = arccos(1 - 2 z_w / D)`, `sinkage = z_w`, and the
-      forces are those of the snow contact at that angle (the base carries the rest).
-    - `INVALID_INPUT` (2): a non-physical or NaN input (see `solve_wheel`); the
-      element's fields are NaN.
-    - `NOT_CONVERGED` (3): the root finder stopped without meeting the tolerance; fields
-      hold its last iterate.
-    - `ENTRY_ANGLE_LIMIT` (4): z_w > 0.46 D and the load needs an entry angle above
-      85 degrees (the wheel would be buried to its axle), outside the model's geometry;
-      fields are evaluated at 85 degrees.
-
-    `CONVERGED` and `BOTTOMED_OUT` are equilibria (`Status.X.failed` is False); the other
-    three are failures.
-    """
-
-    message: str
-    failed: bool
-
-    def __new__(cls, value: int, failed: bool, message: str):
-        member = int.__new__(cls, value)
-        member._value_ = value
-        member.failed = failed
-        member.message = message
-        return member
-
-    CONVERGED = 0, False, "W(theta0) = load within tolerance"
-    BOTTOMED_OUT = (
-        1,
-        False,
-        "the load exceeds what the snow layer can carry: the wheel rests on the base",
-    )
-    INVALID_INPUT = (
-        2,
-        True,
-        "a non-physical or NaN input (a load <= 0, a slip outside [-1, 1], a terrain,"
-        " wheel or distribution parameter out of range); the fields are NaN",
-    )
-    NOT_CONVERGED = (
-        3,
-        True,
-        "the root finder stopped after max_steps without meeting the tolerance; the"
-        " fields hold its last iterate",
-    )
-    ENTRY_ANGLE_LIMIT = (
-        4,
-        True,
-        "the load needs an entry angle above 85 degrees (the wheel would be buried to its"
-        " axle), outside the model's geometry; the fields are evaluated at 85 degrees",
-    )
-
-
-def _throw_on_failure(state: "WheelState") -> "WheelState":
-    """`state`, with a run-time error (`eqx.branched_error_if`) carrying the message of
-    the first failed element's status (in C order) if any element failed."""
-    status = state.status.reshape(-1)
-    if status.size == 0:
-        return state
-    failed = jnp.zeros(status.shape, bool)
-    for member in Status:
-        if member.failed:
-            failed = failed | (status == member)
-    code = jnp.where(jnp.any(failed), status[jnp.argmax(failed)], Status.CONVERGED)
-    messages = [f"solve_wheel: Status.{m.name}: {m.message}" for m in Status]
-    # On every field: under `jit`, an error attached to a field the caller drops is gone.
-    return eqx.branched_error_if(state, jnp.any(failed), code, messages)
 
 
 class WheelState(eqx.Module):
@@ -774,36 +702,6 @@ def solve_wheel(
     """
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
-    state = _solve_wheel(
-        wheel,
-        terrain,
-        load,
-        slip,
-        shear,
-        distribution,
-        slip_angle,
-        lateral,
-        nodes_per_panel,
-        max_steps,
-        initial_entry_angle,
-    )
-    return _throw_on_failure(state) if throw else state
-
-
-def _solve_wheel(
-    wheel,
-    terrain,
-    load,
-    slip,
-    shear,
-    distribution,
-    slip_angle,
-    lateral,
-    nodes_per_panel,
-    max_steps,
-    initial_entry_angle,
-) -> WheelState:
-    """`solve_wheel` without `throw`."""
     _check_model(wheel, terrain, distribution, shear)
     _check_options(nodes_per_panel, max_steps)
     load = _numeric_argument("load", load)
@@ -849,7 +747,7 @@ def _solve_wheel(
         _check_rules(side_rules, dtype, *_magnitude_window(dtype))
     elif _is_thesis_path(terrain, distribution):
         n = _nodes_for(shear, nodes_per_panel)
-        return _solve_wheel_jit(
+        state = _solve_wheel_jit(
             wheel,
             terrain,
             load,
@@ -860,8 +758,9 @@ def _solve_wheel(
             initial_entry_angle,
             _layout(slip, warm_start=initial_entry_angle is not None),
         )
+        return _throw_on_failure(state) if throw else state
     n = _general_nodes_for(shear, nodes_per_panel)
-    return _solve_general_jit(
+    state = _solve_general_jit(
         wheel,
         terrain,
         distribution,
@@ -875,3 +774,4 @@ def _solve_wheel(
         slip_angle,
         lateral,
     )
+    return _throw_on_failure(state) if throw else state
