@@ -11,8 +11,14 @@ from ._constants import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
 from ._terrain.layered import LayeredSnow as LayeredSnow
 from ._terrain.reece import ReeceSoil as ReeceSoil
 from ._wheel.geometry import RigidWheel as RigidWheel
+from ._leaves import ParameterInfo as ParameterInfo
+from ._leaves import as_float as as_float
+from ._leaves import parameter as parameter
+from ._terrain.base import AbstractTerrain as AbstractTerrain
 from ._terrain.base import Terrain as Terrain
 from ._terrain.wong import WongSnow as WongSnow
+from ._wheel.distribution import AbstractStressDistribution as AbstractStressDistribution
+from ._wheel.distribution import FrontRegion as FrontRegion
 from ._wheel.distribution import WongReece as WongReece
 from ._wheel.lateral import Lateral as Lateral
 from ._terrain.bekker import bekker_pressure as bekker_pressure

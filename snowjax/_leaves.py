@@ -8,6 +8,8 @@ Nested parameter sets (`LayeredSnow`) name their leaves by dotted field path (`t
 from __future__ import annotations
 
 import dataclasses
+import functools
+import math
 from typing import Any
 
 import equinox as eqx
@@ -39,6 +41,111 @@ def _as_float(x: Any) -> Any:
     if arr.dtype.kind in "iu":
         arr = arr.astype(jnp.result_type(float))
     return arr
+
+
+@dataclasses.dataclass(frozen=True)
+class ParameterInfo:
+    """What snowjax knows about a physical parameter, kept on its field (`parameter`).
+
+    - `unit`: SI unit, `"-"` for a dimensionless parameter.
+    - `description`: one line, in the thesis's words.
+    - `lower`: the smallest allowed value (`-inf`: none); `open_lower`: whether the
+      bound itself is excluded (`> lower` rather than `>= lower`).
+    - `log_space`: whether `fit_wheel` fits the parameter as u = ln(value) (for a
+      parameter that is never negative), rather than linearly.
+    - `scale`: typical magnitude, in `unit`; the step of a linearly fitted parameter
+      whose start value is 0.
+
+    The eager input checks, `fit_wheel`, `sweep` (and its command line) and the
+    documentation read these, so a terrain law defined outside snowjax needs no table
+    anywhere else.
+    """
+
+    unit: str
+    description: str
+    lower: float = -math.inf
+    open_lower: bool = False
+    log_space: bool = False
+    scale: float = 1.0
+
+    def allowed(self) -> str:
+        """The allowed range as the error messages print it: "> 0 Pa", ">= 0", "finite m"."""
+        unit = "" if self.unit == "-" else f" {self.unit}"
+        if self.lower == -math.inf:
+            return f"finite{unit}"
+        return f"{'>' if self.open_lower else '>='} {self.lower:g}{unit}"
+
+    def ok(self, value):
+        """Elementwise: whether `value` lies in the allowed range (finite is checked apart)."""
+        if self.lower == -math.inf:
+            return value * 0 == 0
+        return value > self.lower if self.open_lower else value >= self.lower
+
+
+def parameter(
+    unit: str,
+    description: str,
+    *,
+    lower: float = -math.inf,
+    open_lower: bool = False,
+    log_space: bool | None = None,
+    scale: float = 1.0,
+) -> dict[str, ParameterInfo]:
+    """The field metadata of a physical parameter: `{"parameter": ParameterInfo(...)}`.
+
+    Declare a parameter field as
+    `p_w: Float[Array, "..."] = eqx.field(converter=snowjax.as_float,
+    metadata=snowjax.parameter("Pa", "Wong's pressure parameter", lower=0, open_lower=True))`.
+    `log_space` defaults to `lower >= 0` (a parameter that is never negative is fitted in
+    log space).
+    """
+    if log_space is None:
+        log_space = lower >= 0
+    return {"parameter": ParameterInfo(unit, description, lower, open_lower, log_space, scale)}
+
+
+@functools.cache
+def _own_parameter_fields(cls) -> tuple[tuple[str, ParameterInfo | None], ...]:
+    """(field name, its `ParameterInfo` or None) of every non-static field of a class."""
+    return tuple(
+        (f.name, f.metadata.get("parameter"))
+        for f in dataclasses.fields(cls)
+        if not f.metadata.get("static", False)
+    )
+
+
+def _parameter_infos(obj, prefix: str = "") -> dict[str, ParameterInfo]:
+    """`ParameterInfo` of every parameter field of a module, by dotted field path."""
+    out: dict[str, ParameterInfo] = {}
+    for name, info in _own_parameter_fields(type(obj)):
+        value = getattr(obj, name, None)
+        if isinstance(value, eqx.Module):
+            out.update(_parameter_infos(value, f"{prefix}{name}."))
+        elif info is not None:
+            out[f"{prefix}{name}"] = info
+    return out
+
+
+def _parameter_rules(obj) -> list[tuple[str, Any, Any, str]]:
+    """(field path, value, ok mask, allowed range) of every parameter field of `obj`
+    (nested modules included) from its `ParameterInfo`; `None` values are skipped."""
+    rules = []
+    for path, info in _parameter_infos(obj).items():
+        value = _get_path(obj, path)
+        if value is not None:
+            rules.append((path, value, info.ok(value), info.allowed()))
+    return rules
+
+
+def as_float(x: Any) -> Any:
+    """The converter of parameter fields: a number or array becomes a floating array.
+
+    Python ints and integer arrays become the default float type; floating arrays keep
+    their dtype (a float32 parameter set stays float32); `None` and other placeholders
+    pass through.  Use it as `eqx.field(converter=snowjax.as_float, ...)` in a terrain
+    law or stress distribution of your own.
+    """
+    return _as_float(x)
 
 
 _KINDS = {

@@ -112,7 +112,7 @@ from ._sim.vehicle import (
 )
 from ._terrain.base import Terrain
 from ._wheel.contact import ShearModel
-from ._wheel.distribution import WongReece
+from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import RigidWheel
 
@@ -517,7 +517,7 @@ def step(
     load: Float[ArrayLike, " n"] | str | None = None,
     shear: ShearModel = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> tuple[mjx.Data, MjxWheelForces]:
     """One MJX time step with the snow's forces on the wheels; pure and differentiable.
 
@@ -638,7 +638,7 @@ def rollout(
     load: Float[ArrayLike, " n"] | str | None = None,
     shear: ShearModel = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> Rollout:
     """`num_steps` calls of `step` in one `jax.lax.scan`, the entry angles carried along.
 

@@ -10,6 +10,8 @@ import ast
 import pathlib
 import re
 
+import pytest
+
 PKG = pathlib.Path(__file__).resolve().parents[1] / "snowjax"
 
 # What each part may import (besides itself).
@@ -92,18 +94,24 @@ def test_module_length():
     assert not long, "\n".join(long)
 
 
-def test_a_new_terrain_law_is_one_class():
-    """A law defined outside the package (one Terrain subclass) runs through solve_wheel.
+def _contributing_linear_soil():
+    """The `LinearSoil` of CONTRIBUTING's recipe, executed as written there."""
+    text = (PKG.parent / "CONTRIBUTING.md").read_text()
+    recipe = text[text.index("### Adding a terrain law or a stress distribution") :]
+    code = recipe[recipe.index("```python\n") + len("```python\n") : recipe.index("```\n\n")]
+    namespace: dict = {}
+    exec(compile(code, "CONTRIBUTING.md", "exec"), namespace)
+    return namespace["LinearSoil"]
 
-    A linear law sigma = k z is Bekker's with n = 1, k_c = 0: both must give the same
-    equilibrium, front region and Wong-Reece, batched.
-    """
+
+def _plain_linear_soil():
+    """The same law with plain `eqx.field`s (no metadata): the shear-strength fields get
+    the standard rules, the modulus none."""
     import equinox as eqx
     import jax
     import jax.numpy as jnp
-    import numpy as np
 
-    import snowjax as sj  # float64: tests/conftest.py
+    import snowjax as sj
 
     class LinearSoil(sj.Terrain):
         modulus: jax.Array = eqx.field(converter=jnp.asarray)
@@ -118,6 +126,21 @@ def test_a_new_terrain_law_is_one_class():
         def reference(cls):
             return cls(2e6, 1e3, 0.4, 0.01)
 
+    return LinearSoil
+
+
+@pytest.mark.parametrize("make", [_contributing_linear_soil, _plain_linear_soil])
+def test_a_new_terrain_law_is_one_class(make):
+    """A law defined outside the package (one class) runs through solve_wheel.
+
+    A linear law sigma = k z is Bekker's with n = 1, k_c = 0: both must give the same
+    equilibrium, front region and Wong-Reece, batched.
+    """
+    import numpy as np
+
+    import snowjax as sj  # float64: tests/conftest.py
+
+    LinearSoil = make()
     wheel = sj.RigidWheel(1.0, 0.4)
     mine = LinearSoil(2e6, 1e3, 0.4, 0.01)
     bekker = sj.BekkerSoil(n=1.0, k_c=0.0, k_phi=2e6, cohesion=1e3, tan_phi=0.4,
@@ -129,3 +152,5 @@ def test_a_new_terrain_law_is_one_class():
         assert np.all(np.asarray(a.status) == 0)
         np.testing.assert_allclose(a.sinkage, b.sinkage, rtol=1e-12)
         np.testing.assert_allclose(a.drawbar_pull, b.drawbar_pull, rtol=1e-10)
+    with pytest.raises(ValueError, match=r"terrain\.cohesion must be finite and >= 0 Pa"):
+        sj.solve_wheel(wheel, LinearSoil(2e6, -1.0, 0.4, 0.01), 2e3, 0.1)

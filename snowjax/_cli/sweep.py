@@ -43,23 +43,23 @@ import pathlib
 import sys
 
 _PARAMETERS = (
-    # (option, field, object, unit)
-    ("p-w", "p_w", "snow", "Pa"),
-    ("z-w", "z_w", "snow", "m"),
-    ("cohesion", "cohesion", "snow", "Pa"),
-    ("tan-phi", "tan_phi", "snow", "-"),
-    ("shear-modulus", "shear_modulus", "snow", "m"),
-    ("diameter", "diameter", "wheel", "m"),
-    ("width", "width", "wheel", "m"),
-    ("n", "n", "terrain", "-"),
-    ("k-c", "k_c", "terrain", "N/m^(n+1)"),
-    ("k-phi", "k_phi", "terrain", "N/m^(n+2)"),
-    ("k-c-prime", "k_c_prime", "terrain", "-"),
-    ("k-phi-prime", "k_phi_prime", "terrain", "-"),
-    ("unit-weight", "unit_weight", "terrain", "N/m^3"),
-    ("c1", "c1", "distribution", "-"),
-    ("c2", "c2", "distribution", "-"),
-    ("c3", "c3", "distribution", "-"),
+    # (option, field, object); the unit comes from the field's ParameterInfo
+    ("p-w", "p_w", "snow"),
+    ("z-w", "z_w", "snow"),
+    ("cohesion", "cohesion", "snow"),
+    ("tan-phi", "tan_phi", "snow"),
+    ("shear-modulus", "shear_modulus", "snow"),
+    ("diameter", "diameter", "wheel"),
+    ("width", "width", "wheel"),
+    ("n", "n", "terrain"),
+    ("k-c", "k_c", "terrain"),
+    ("k-phi", "k_phi", "terrain"),
+    ("k-c-prime", "k_c_prime", "terrain"),
+    ("k-phi-prime", "k_phi_prime", "terrain"),
+    ("unit-weight", "unit_weight", "terrain"),
+    ("c1", "c1", "distribution"),
+    ("c2", "c2", "distribution"),
+    ("c3", "c3", "distribution"),
 )
 _TERRAINS = ("wong", "bekker", "reece", "layered")
 _PRESETS = {
@@ -69,6 +69,23 @@ _PRESETS = {
     "layered": ("ice-layer-example",),
 }
 _REECE_REQUIRED = ("n", "k_c_prime", "k_phi_prime", "unit_weight", "cohesion", "tan_phi")
+
+
+def _units() -> dict[str, str]:
+    """Field name -> unit, from the `ParameterInfo` of the fields of the built-in classes."""
+    from .._leaves import _own_parameter_fields
+    from .._terrain.bekker import BekkerSoil
+    from .._terrain.reece import ReeceSoil
+    from .._terrain.wong import WongSnow
+    from .._wheel.distribution import WongReece
+    from .._wheel.geometry import RigidWheel
+
+    return {
+        name: info.unit
+        for cls in (RigidWheel, WongSnow, BekkerSoil, ReeceSoil, WongReece)
+        for name, info in _own_parameter_fields(cls)
+        if info is not None
+    }
 
 
 def register(sub) -> None:
@@ -102,12 +119,13 @@ def register(sub) -> None:
         " plate-rule variant (p_w 12.92 kPa), Table 4.1 ratios for D = 0.736 m (default"
         " thesis)",
     )
-    for option, field, obj, unit in _PARAMETERS:
+    units = _units()
+    for option, field, obj in _PARAMETERS:
         p.add_argument(
             f"--{option}",
             default=None,
             metavar="VALUES",
-            help=f"override {obj} {field} [{unit}]; a list gives several parameter sets",
+            help=f"override {obj} {field} [{units[field]}]; a list gives several parameter sets",
         )
     p.add_argument(
         "--set",
@@ -245,7 +263,7 @@ def _build(args):
     slips = _values(args.slips, "slips")
     # Every parameter option given: key -> (object, field path, values, option text).
     given = {}
-    for option, field, obj, _ in _PARAMETERS:
+    for option, field, obj in _PARAMETERS:
         text = getattr(args, option.replace("-", "_"))
         if text is not None:
             given[option] = (obj, field, _values(text, option), f"--{option}")

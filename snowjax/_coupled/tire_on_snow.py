@@ -30,7 +30,7 @@ from .._tire.tire import (
     tire_parameters,
 )
 from .._wheel.contact import ShearModel
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
 from .._wheel.geometry import RigidWheel
 
@@ -124,7 +124,7 @@ def tire_forces_on_snow(
     slip_angle: Float[ArrayLike, "..."],
     *,
     shear: ShearModel = "classic",
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
     coefficients: TireCoefficients | None = None,
     parameters: TireParameters | None = None,
 ) -> TireOnSnowForces:

@@ -6,7 +6,8 @@ sinkage and/or drawbar pull / motion resistance versus slip at one or more loads
 straight through the vmapped wheel equilibrium `solve_wheel` (eq. 4.14); its gradients
 come from the implicit function theorem at the root, not from unrolled iterations.
 `fit_parameter_names` lists the names a terrain and distribution offer; parameters that
-are never negative are fitted in log space (`LOG_SPACE_PARAMETERS`), the others linearly.
+are never negative are fitted in log space, the others linearly, as the `ParameterInfo` on
+each field says (`snowjax.parameter`).
 
 Equation numbers refer to Sankapalli (2004), *Predictive semi-empirical analysis for
 tire/snow interaction*, MSc thesis, University of Alaska Fairbanks.
@@ -24,11 +25,17 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import ArrayLike, Float
 
-from .._leaves import _module_leaves, _parameter_names, _with_leaves
+from .._leaves import (
+    ParameterInfo,
+    _module_leaves,
+    _parameter_infos,
+    _parameter_names,
+    _with_leaves,
+)
 from .._terrain.base import Terrain
 from .._terrain.wong import WongSnow
 from .._wheel.contact import ShearModel
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _check_model
@@ -50,49 +57,14 @@ __all__ = [
     "fit_parameter_names",
     "WHEEL_PARAMETERS",
     "WHEEL_QUANTITIES",
-    "LOG_SPACE_PARAMETERS",
 ]
 
 WHEEL_PARAMETERS = ("p_w", "z_w", "cohesion", "tan_phi", "shear_modulus")
 WHEEL_QUANTITIES = ("sinkage", "drawbar_pull", "motion_resistance", "lateral_force")
-_WHEEL_UNITS = {"p_w": "Pa", "z_w": "m", "cohesion": "Pa", "tan_phi": "-", "shear_modulus": "m"}
-
 # Scaled residual given to data points whose equilibrium failed at the current iterate
 # (constant, zero gradient): it raises the loss, so Levenberg–Marquardt rejects a step
 # into a region where the model cannot be evaluated.
 _FAILED_RESIDUAL = 10.0
-
-# Unit of every known parameter leaf, by field name (the last component of its path).
-_PARAMETER_UNITS = {
-    **_WHEEL_UNITS,
-    "n": "-",
-    "k_c": "N/m^(n+1)",
-    "k_phi": "N/m^(n+2)",
-    "k_c_prime": "-",
-    "k_phi_prime": "-",
-    "unit_weight": "N/m^3",
-    "ice_failure_pressure": "Pa",
-    "c1": "-",
-    "c2": "-",
-    "c3": "-",
-}
-# Leaves that are never negative are fitted in log space (u = ln theta); all others
-# (k_c, k_phi, k_c_prime, k_phi_prime, c1, c2, c3, and any leaf of a user-defined
-# terrain) as theta = start + scale u.
-LOG_SPACE_PARAMETERS = (
-    "p_w", "z_w", "cohesion", "tan_phi", "shear_modulus", "n", "unit_weight",
-    "ice_failure_pressure",
-)  # fmt: skip
-# Scale of a linearly fitted parameter whose start value is 0 (otherwise |start|).
-_LINEAR_SCALES = {
-    "k_c": 1e3,  # N/m^(n+1)
-    "k_phi": 1e5,  # N/m^(n+2)
-    "k_c_prime": 1.0,
-    "k_phi_prime": 1.0,
-    "c1": 0.1,
-    "c2": 0.1,
-    "c3": 0.1,
-}
 
 
 def _field(path: str) -> str:
@@ -212,19 +184,37 @@ def _resolve_fit_names(fit, terrain, distribution, lateral=None):
     return names, tuple(table[nm] for nm in names)
 
 
-def _transform(targets, theta0) -> Transform:
-    """Log space (θ = eᵘ) for `LOG_SPACE_PARAMETERS`; θ = θ_start + s u for the others.
+def _infos(objects) -> dict[tuple[str, str], ParameterInfo]:
+    """(owner, field path) -> `ParameterInfo` of every declared parameter of the objects."""
+    return {
+        (owner, path): info
+        for owner, obj in objects.items()
+        if obj is not None
+        for path, info in _parameter_infos(obj).items()
+    }
 
-    s = |θ_start|, or a typical magnitude (`_LINEAR_SCALES`) for a zero start value.
+
+def _transform(targets, theta0, infos) -> Transform:
+    """Log space (θ = eᵘ) for parameters whose `ParameterInfo.log_space` is set; θ = θ_start
+    + s u for the others (and for leaves declared without a `ParameterInfo`).
+
+    s = |θ_start|, or the parameter's typical magnitude (`ParameterInfo.scale`, else 1)
+    for a zero start value.
     """
-    is_log = np.array([_field(p) in LOG_SPACE_PARAMETERS for _, p in targets])
+    is_log = np.array([t in infos and infos[t].log_space for t in targets])
     steps = np.array([
-        abs(t0) if t0 != 0 else _LINEAR_SCALES.get(_field(p), 1.0)
-        for t0, (_, p) in zip(theta0, targets)
+        abs(t0) if t0 != 0 else (infos[t].scale if t in infos else 1.0)
+        for t0, t in zip(theta0, targets)
     ])  # fmt: skip
     return Transform.make(
         is_log, shift=np.where(is_log, 0.0, theta0), scale=np.where(is_log, 1.0, steps)
     )
+
+
+def _unit(infos, target) -> str:
+    """The unit of a leaf from its `ParameterInfo` ("-": dimensionless; "": unknown)."""
+    info = infos.get(target)
+    return "" if info is None else info.unit
 
 
 # ---------------------------------------------------------------------------------------
@@ -289,6 +279,7 @@ def _start_values(snow, distribution, targets, lateral=None) -> dict[str, dict[s
     start: dict[str, dict[str, float]] = {owner: {} for owner in owners}
     objects = {"terrain": snow, "distribution": distribution, "lateral": lateral}
     labels = {"terrain": "snow", "distribution": "distribution", "lateral": "lateral"}
+    infos = _infos(objects)
     for owner, obj in objects.items():
         if obj is None:
             continue
@@ -302,7 +293,8 @@ def _start_values(snow, distribution, targets, lateral=None) -> dict[str, dict[s
                 )
             v = float(v.reshape(()))
             fitted = path in fitted_paths[owner]
-            if _field(path) in LOG_SPACE_PARAMETERS:
+            info = infos.get((owner, path))
+            if info is not None and info.log_space:
                 if not math.isfinite(v) or v < 0 or (fitted and v <= 0):
                     raise ValueError(
                         f"{labels[owner]}.{path} must be finite and "
@@ -358,7 +350,7 @@ def _evaluate(residual, u, args):
     return residual(u, args)
 
 
-def _start_diagnosis(residual, u0, args, start, targets, m) -> str:
+def _start_diagnosis(residual, u0, args, start, targets, m, infos) -> str:
     """'; at the start values (...) k of m data points have no equilibrium (...)', or ''.
 
     Lists the fitted and the held parameters; evaluated only after a failed fit (one more
@@ -373,7 +365,7 @@ def _start_diagnosis(residual, u0, args, start, targets, m) -> str:
 
     def listed(fitted: bool) -> str:
         return ", ".join(
-            f"{path} = {v:.6g} {_PARAMETER_UNITS.get(_field(path), '-')}".removesuffix(" -")
+            f"{path} = {v:.6g} {_unit(infos, (owner, path))}".removesuffix(" -").rstrip()
             for owner, leaves in start.items()
             for path, v in leaves.items()
             if ((owner, path) in targets) == fitted
@@ -430,7 +422,7 @@ def fit_wheel(
     max_steps: int = 100,
     nodes_per_panel: int | None = None,
     solve_max_steps: int = 64,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
     slip_angle: Float[ArrayLike, " m"] | None = None,
     lateral: Lateral | None = None,
     lateral_force: Float[ArrayLike, " m"] | None = None,
@@ -457,19 +449,20 @@ def fit_wheel(
     `fit_parameter_names(terrain, distribution)` lists them; an unknown name raises a
     `ValueError` that lists them.  `FitResult.params` uses the unprefixed names.
 
-    **Fitted variables.**  Parameters that are never negative — `p_w`, `z_w`,
-    `cohesion`, `tan_phi`, `shear_modulus`, `n`, `unit_weight`, `ice_failure_pressure`
-    (`LOG_SPACE_PARAMETERS`) — are fitted as u = ln θ (so they stay positive; their
-    start value must be > 0).  The moduli that may be zero or negative (`k_c`, `k_phi`,
-    `k_c_prime`, `k_phi_prime`: Bekker's k_c is negative for some soils) and the
-    distribution's `c1`, `c2`, `c3` (c3 < 0 puts the exit behind the axle) are fitted
-    linearly, θ = θ_start + s u with s = |θ_start|, or, for a zero start value, a
-    typical magnitude (k_c 1e3 N/m^(n+1), k_phi 1e5 N/m^(n+2), k'_c and k'_φ 1,
-    c1..c3 0.1).  The other parameters keep their values in `snow` / `distribution`,
-    which also supply the start values.  Standard errors come back by the delta
-    method, se(θ) = θ se(u) (log) or s se(u) (linear).  Iterates where the model is
-    invalid (e.g. c1 + c2 i outside [0, 1)) get the failed-point residual below, so
-    the optimiser steps back from them.
+    **Fitted variables.**  As each field's `ParameterInfo` says (`snowjax.parameter`):
+    parameters that are never negative — `p_w`, `z_w`, `cohesion`, `tan_phi`,
+    `shear_modulus`, `n`, `unit_weight`, `ice_failure_pressure` — are fitted as u = ln θ
+    (so they stay positive; their start value must be > 0).  The moduli that may be zero
+    or negative (`k_c`, `k_phi`, `k_c_prime`, `k_phi_prime`: Bekker's k_c is negative for
+    some soils), the distribution's `c1`, `c2`, `c3` (c3 < 0 puts the exit behind the
+    axle) and leaves declared without a `ParameterInfo` are fitted linearly,
+    θ = θ_start + s u with s = |θ_start|, or, for a zero start value, the field's typical
+    magnitude `ParameterInfo.scale` (k_c 1e3 N/m^(n+1), k_phi 1e5 N/m^(n+2), k'_c and k'_φ
+    1, c1..c3 0.1; 1 without a `ParameterInfo`).  The other parameters keep their values
+    in `snow` / `distribution`, which also supply the start values.  Standard errors
+    come back by the delta method, se(θ) = θ se(u) (log) or s se(u) (linear).  Iterates
+    where the model is invalid (e.g. c1 + c2 i outside [0, 1)) get the failed-point
+    residual below, so the optimiser steps back from them.
 
     **Residuals.**  For each measured quantity q, r = (model − data) / scale_q, stacked
     quantity-major (all sinkages, then all drawbar pulls, then all motion resistances).
@@ -544,9 +537,12 @@ def fit_wheel(
             "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
             f"got {type(snow).__name__}"
         )
-    if distribution is not None and not isinstance(distribution, WongReece):
+    if isinstance(distribution, FrontRegion):  # no leaves: the same as None
+        distribution = None
+    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
         raise TypeError(
-            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
+            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
     if lateral is not None and not isinstance(lateral, Lateral):
         raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
@@ -584,7 +580,8 @@ def fit_wheel(
     dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
     lateral_a = None if lateral is None else _rebuild(lateral, start["lateral"], dtype)
     theta0 = np.array([start[o][p] for o, p in targets])
-    transform = _transform(targets, theta0)
+    infos = _infos({"terrain": snow, "distribution": distribution, "lateral": lateral})
+    transform = _transform(targets, theta0, infos)
     residual = _WheelResidual(
         names=names,
         quantities=quantities,
@@ -611,7 +608,7 @@ def fit_wheel(
     try:
         sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
     except NonFiniteModelError as err:
-        at_start = _start_diagnosis(residual, u0, args, start, targets, m)
+        at_start = _start_diagnosis(residual, u0, args, start, targets, m, infos)
         raise NonFiniteModelError(f"fit_wheel: {err}{at_start}") from None
     pred, status = sol.aux
 
@@ -663,7 +660,7 @@ def fit_wheel(
         model_txt = f", {type(snow).__name__}" + (
             "" if distribution is None else f" with {type(distribution).__name__}"
         )
-    units = {nm: _PARAMETER_UNITS.get(_field(p), "") for nm, (_, p) in zip(names, targets)}
+    units = {nm: _unit(infos, t) for nm, t in zip(names, targets)}
     return fit_result(
         sol,
         [part],

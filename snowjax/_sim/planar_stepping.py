@@ -25,7 +25,7 @@ from jaxtyping import ArrayLike, Float
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
 from .planar import (
     NUM_WHEELS,
@@ -55,7 +55,7 @@ class _PlanarTerm(_WarmStartTerm):
     speed_eps: float = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    distribution: WongReece | None = None
+    distribution: AbstractStressDistribution | None = None
 
     def forces(self, t, y, hint):
         """(steer angles (4,) [rad], wheel forces) at time t [s] and state y (10,)."""
@@ -204,7 +204,7 @@ def simulate_planar(
     nodes_per_panel: int | None = None,
     newton_steps: int = 100,
     wheel_max_steps: int = 5,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> PlanarTrajectory:
     """Simulate a four-wheel vehicle that steers on snow, in the plane; differentiable.
 
@@ -271,7 +271,8 @@ def simulate_planar(
       85 degrees); without the straggler phase the program compiles in about 70 % of the
       time.  An equilibrium not converged within the limit shows as
       `Status.NOT_CONVERGED` in `status`; raise the limit then.
-    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
+      `WongReece` or another `AbstractStressDistribution`
       (c1, c2, c3 [-]; scalar leaves).
 
     **Returns:** `PlanarTrajectory` with `1 + round(t1 / dt) // save_every` rows.

@@ -45,7 +45,7 @@ from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
 from .levenberg_marquardt import _LevenbergMarquardt
 from .vehicle import (
@@ -95,7 +95,7 @@ class _VehicleTerm(_WarmStartTerm):
     speed_eps: float = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    distribution: WongReece | None = None
+    distribution: AbstractStressDistribution | None = None
 
     def forces(self, y, hint):
         """Wheel forces at state(s) y [..., n + 2] (warm start `hint`, or None)."""
@@ -297,7 +297,7 @@ def simulate_longitudinal(
     adjoint: diffrax.AbstractAdjoint | None = None,
     nodes_per_panel: int | None = None,
     newton_steps: int = 100,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> Trajectory:
     """Simulate a vehicle driving straight on snow; differentiable end to end.
 
@@ -339,7 +339,8 @@ def simulate_longitudinal(
     - `nodes_per_panel`: quadrature nodes per panel of `solve_wheel` (default: its own).
     - `newton_steps`: iteration limit of each implicit step's Newton solve; a step not
       solved within it is retried as smaller steps.
-    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
+      `WongReece` or another `AbstractStressDistribution`
       (c1, c2, c3 [-]; scalar leaves), passed to `solve_wheel`.
 
     **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.

@@ -89,7 +89,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel, _check_shear
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _validate_eagerly
@@ -283,7 +283,7 @@ def wheel_forces(
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
     nodes_per_panel: int | None = None,
     max_steps: int = 64,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> WheelForces:
     """Snow forces on a rigid wheel from its kinematic state: the force function to call
     inside any simulator step (MJX, Brax, your own integrator).
@@ -314,7 +314,8 @@ def wheel_forces(
     - `initial_entry_angle`: warm start theta0 [rad] for `solve_wheel`, e.g. the
       `entry_angle` of the previous simulator step; changes only the iteration count.
     - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
-    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
+      `WongReece` or another `AbstractStressDistribution`
       (c1, c2, c3 [-]), passed to `solve_wheel`.
 
     **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage

@@ -17,7 +17,7 @@ from .._constants import VERSION
 from .._leaves import _get_path, _module_leaves, _parameter_names, _with_leaves
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.geometry import RigidWheel
 
 MANIFEST = "manifest.json"
@@ -323,8 +323,10 @@ def _define(
     wheel_t, wheel_leaves = _leaf_arrays(wheel, RigidWheel, "wheel")
     terrain_t, terrain_leaves = _leaf_arrays(snow, Terrain, "snow", _TERRAIN_WHAT)
     dist_t, dist_leaves = None, {}
+    if isinstance(distribution, FrontRegion):  # the front region is spelled None in a sweep
+        distribution = None
     if distribution is not None:
-        dist_t, dist_leaves = _leaf_arrays(distribution, WongReece, "distribution")
+        dist_t, dist_leaves = _leaf_arrays(distribution, AbstractStressDistribution, "distribution")
     try:
         _check_model(wheel_t, terrain_t, dist_t, shear)
     except ValueError as err:

@@ -68,7 +68,7 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
-from .._wheel.distribution import WongReece
+from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.geometry import RigidWheel
 from .definition import (
     _FORMATS,
@@ -347,7 +347,7 @@ def sweep(
     slips: Float[ArrayLike, " slips"],
     *,
     shear: str = "classic",
-    distribution: WongReece | Sequence[WongReece] | None = None,
+    distribution: AbstractStressDistribution | Sequence[AbstractStressDistribution] | None = None,
     out: str | os.PathLike = "snowjax-sweep",
     chunk_size: int = 8192,
     grid: bool = True,
@@ -382,7 +382,8 @@ def sweep(
     - `slips`: driving slips i [-] in [-1, 1] (scalar or 1-D).
     - `shear`: `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
       `"simplified"` needs a `WongSnow` and no distribution).
-    - `distribution`: `None` (the thesis's front-region stresses) or a `WongReece`
+    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
+      `WongReece` or another `AbstractStressDistribution`
       (c1, c2, c3 [-]; scalar or 1-D leaves, or a list of them), as in `solve_wheel`.
       The terrain's and the distribution's types and leaf names are part of the sweep
       definition: a sweep of another terrain or distribution in `out` is refused.

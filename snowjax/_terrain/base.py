@@ -3,16 +3,20 @@
 All values are SI: Pa, m, N/m^(n+1), N/m^(n+2).
 """
 
-from __future__ import annotations
-
 import abc
 from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
+from equinox import AbstractVar
 from jaxtyping import Array, ArrayLike, Float
 
-from .._leaves import _check_real_leaves
+from .._leaves import (
+    _check_real_leaves,
+    _own_parameter_fields,
+    _parameter_rules,
+    parameter,
+)
 
 
 def _clip_negative(x) -> Array:
@@ -28,23 +32,38 @@ def _safe_power(x: Array, n: Array) -> Array:
     return jnp.where(positive, safe_x**n, 0.0)
 
 
-class Terrain(eqx.Module):
-    """A terrain the rigid wheel can run on: a pressure–sinkage law plus shear strength.
+class AbstractTerrain(eqx.Module):
+    """A terrain the wheel can run on: a pressure–sinkage law plus shear strength.
 
-    Subclasses (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`) hold their physical
-    parameters as array leaves, so they broadcast, vmap and differentiate like the rest
-    of snowjax.  The wheel needs three things from a terrain:
+    Subclasses (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`, or a law of your
+    own) hold their physical parameters as array leaves declared with
+    [`snowjax.parameter`][] (unit, allowed range, fitting space on the field), so they
+    broadcast, vmap and differentiate like the rest of snowjax, and the checks, the
+    fit and the sweep read what they need from the fields.  The wheel needs from a
+    terrain:
 
-    - `pressure(sinkage, width)`: the normal stress sigma [Pa] under a plate of the
-      given width [m] at sinkage z [m] (the rim stress law of the wheel, eq. 4.1b for
-      Wong's snow);
-    - `rim_properties(sinkage, width)`: sigma plus the Mohr–Coulomb cohesion [Pa],
-      tan(phi) [-] and Janosi–Hanamoto shear modulus K [m] that act at that sinkage;
-    - `depth`: the depth of the hard base [m] (`inf` for an infinitely deep terrain), the
-      largest sinkage the wheel can reach.
+    - `pressure(sinkage, width)` (abstract): the normal stress sigma [Pa] under a plate
+      of the given width [m] at sinkage z [m] (the rim stress law of the wheel, eq. 4.1b
+      for Wong's snow);
+    - `cohesion` c [Pa], `tan_phi` [-] and `shear_modulus` K [m] (abstract variables:
+      fields or properties), the Mohr–Coulomb strength (2.5) and the Janosi–Hanamoto
+      modulus (2.8) at the surface;
+    - `rim_properties(sinkage, width)`: sigma plus the c, tan phi and K that act at that
+      sinkage (default: the surface values everywhere);
+    - `depth`: the depth of the hard base [m] (default `inf`: infinitely deep), the
+      largest sinkage the wheel can reach;
+    - `breakpoint_sinkages()`: sinkages [m] at which the law has a kink or a jump
+      (default none; `LayeredSnow`'s ice failure), where the contact quadrature cuts its
+      panels;
+    - `reference()` (abstract class method): a valid parameter set of the kind, which
+      stands in for invalid batch elements.
     """
 
     __check_init__ = _check_real_leaves
+
+    cohesion: AbstractVar[Float[Array, "..."]]
+    tan_phi: AbstractVar[Float[Array, "..."]]
+    shear_modulus: AbstractVar[Float[Array, "..."]]
 
     #: Prefix used in error messages ("snow.p_w must be ...").
     label: ClassVar[str] = "terrain"
@@ -60,20 +79,31 @@ class Terrain(eqx.Module):
     ) -> tuple[Array, Array, Array, Array]:
         """(sigma [Pa], cohesion c [Pa], tan phi [-], shear modulus K [m]) at sinkage z [m]."""
         sigma = self.pressure(sinkage, width)
-        return sigma, self.cohesion, self.tan_phi, self.shear_modulus  # type: ignore[attr-defined]
+        return sigma, self.cohesion, self.tan_phi, self.shear_modulus
 
     @property
     def depth(self) -> Array:
         """Depth of the hard base below the surface [m]; `inf` when there is none."""
-        return jnp.full_like(jnp.asarray(self.cohesion), jnp.inf)  # type: ignore[attr-defined]
+        return jnp.full_like(jnp.asarray(self.cohesion), jnp.inf)
+
+    def breakpoint_sinkages(self) -> tuple[Array, ...]:
+        """Sinkages [m] where the pressure–sinkage law has a kink or a jump (none)."""
+        return ()
 
     def constraints(self, shear: str = "classic") -> list[tuple[str, Array, Array, str]]:
-        """Validity of each parameter: (field name, value, ok mask, allowed range)."""
-        return [
-            ("cohesion", self.cohesion, self.cohesion >= 0, ">= 0 Pa"),  # type: ignore[attr-defined]
-            ("tan_phi", self.tan_phi, self.tan_phi >= 0, ">= 0"),  # type: ignore[attr-defined]
-            ("shear_modulus", self.shear_modulus, self.shear_modulus > 0, "> 0 m"),  # type: ignore[attr-defined]
-        ]
+        """Validity of each parameter: (field path, value, ok mask, allowed range).
+
+        Read from the `ParameterInfo` of every field (`snowjax.parameter`), nested
+        parameter sets included; shear-strength fields declared without one (plain
+        `eqx.field`) get the standard rules (c >= 0, tan phi >= 0, K > 0).
+        """
+        rules = _parameter_rules(self)
+        for name, info in _own_parameter_fields(type(self)):
+            if info is None and name in _STRENGTH:
+                value = getattr(self, name)
+                default = _STRENGTH[name]
+                rules.append((name, value, default.ok(value), default.allowed()))
+        return rules
 
     def wheel_constraints(self, width) -> list[tuple[str, Array, Array, str]]:
         """Rules that involve the wheel width b [m] (e.g. a positive Bekker modulus)."""
@@ -81,5 +111,25 @@ class Terrain(eqx.Module):
 
     @classmethod
     @abc.abstractmethod
-    def reference(cls) -> "Terrain":
+    def reference(cls) -> "AbstractTerrain":
         """A valid parameter set of this kind (stands in for invalid batch elements)."""
+
+
+# The name of the base class before it was marked abstract (still public).
+Terrain = AbstractTerrain
+
+# Field metadata of the shear strength every law has (`eqx.field(..., metadata=COHESION)`).
+COHESION = parameter("Pa", "Mohr–Coulomb cohesion c (2.5)", lower=0.0)
+TAN_PHI = parameter("-", "tangent of the internal friction angle (2.5)", lower=0.0)
+SHEAR_MODULUS = parameter(
+    "m",
+    "Janosi–Hanamoto shear deformation modulus K (2.8, 4.11)",
+    lower=0.0,
+    open_lower=True,
+    scale=0.01,
+)
+_STRENGTH = {
+    "cohesion": COHESION["parameter"],
+    "tan_phi": TAN_PHI["parameter"],
+    "shear_modulus": SHEAR_MODULUS["parameter"],
+}

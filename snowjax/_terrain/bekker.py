@@ -11,8 +11,15 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import (
     DEFAULT_SHEAR_MODULUS,
 )
-from .._leaves import _as_float
-from .base import Terrain, _clip_negative, _safe_power
+from .._leaves import _as_float, parameter
+from .base import (
+    COHESION,
+    SHEAR_MODULUS,
+    TAN_PHI,
+    AbstractTerrain,
+    _clip_negative,
+    _safe_power,
+)
 
 
 def bekker_pressure(
@@ -39,7 +46,7 @@ def bekker_pressure(
     return (jnp.asarray(k_c) / jnp.asarray(width) + k_phi) * _safe_power(z, jnp.asarray(n))
 
 
-class BekkerSoil(Terrain):
+class BekkerSoil(AbstractTerrain):
     """A terrain described by Bekker's pressure–sinkage law (2.1) and Mohr–Coulomb (2.5).
 
     On the wheel, `sigma = (k_c / b + k_phi) z^n` with b the wheel width, and the shear
@@ -58,26 +65,25 @@ class BekkerSoil(Terrain):
       since Wong's Table 2.3 gives no K for its snows).
     """
 
-    n: Float[Array, "..."] = eqx.field(converter=_as_float)
-    k_c: Float[Array, "..."] = eqx.field(converter=_as_float)
-    k_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
-    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
-    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
+    n: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("-", "sinkage exponent (2.1)", lower=0.0, open_lower=True),
+    )
+    k_c: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("N/m^(n+1)", "cohesive modulus (2.1)", scale=1e3)
+    )
+    k_phi: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("N/m^(n+2)", "frictional modulus (2.1)", scale=1e5)
+    )
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=COHESION)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=TAN_PHI)
     shear_modulus: Float[Array, "..."] = eqx.field(
-        converter=_as_float, default=DEFAULT_SHEAR_MODULUS, kw_only=True
+        converter=_as_float, metadata=SHEAR_MODULUS, default=DEFAULT_SHEAR_MODULUS, kw_only=True
     )
 
     def pressure(self, sinkage, width):
         """Bekker's law (2.1), `sigma = (k_c / b + k_phi) z^n` [Pa], b = `width` [m]."""
         return bekker_pressure(sinkage, width, self.k_c, self.k_phi, self.n)
-
-    def constraints(self, shear: str = "classic"):
-        return [
-            ("n", self.n, self.n > 0, "> 0"),
-            ("k_c", self.k_c, self.k_c * 0 == 0, "finite N/m^(n+1)"),
-            ("k_phi", self.k_phi, self.k_phi * 0 == 0, "finite N/m^(n+2)"),
-            *Terrain.constraints(self, shear),
-        ]
 
     def wheel_constraints(self, width):
         modulus = self.k_c / width + self.k_phi

@@ -11,12 +11,12 @@ from jaxtyping import Array, Float
 from .._constants import (
     THESIS_DIAMETER,
 )
-from .._leaves import _as_float
-from .base import Terrain
+from .._leaves import _as_float, parameter
+from .base import AbstractTerrain
 from .wong import WongSnow, wong_pressure
 
 
-class LayeredSnow(Terrain):
+class LayeredSnow(AbstractTerrain):
     """A snow cover with an ice layer between two snow layers on a hard base.
 
     Wong & Preston-Thomas (1983, J. Terramechanics 20(1):1-12; thesis section 2.1.2)
@@ -51,9 +51,44 @@ class LayeredSnow(Terrain):
 
     top: WongSnow
     bottom: WongSnow
-    ice_failure_pressure: Float[Array, "..."] = eqx.field(converter=_as_float)
+    ice_failure_pressure: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "Pa",
+            "pressure p_f at which the ice layer breaks",
+            lower=0.0,
+            open_lower=True,
+            scale=1e4,
+        ),
+    )
 
     label: ClassVar[str] = "snow"
+
+    # An explicit constructor: type checkers read the AbstractVar shear-strength fields
+    # that the properties below implement as constructor arguments (equinox issue 1123).
+    def __init__(self, top: WongSnow, bottom: WongSnow, ice_failure_pressure):
+        self.top = top
+        self.bottom = bottom
+        self.ice_failure_pressure = ice_failure_pressure
+
+    @property
+    def cohesion(self) -> Array:
+        """c [Pa] of the top layer (the surface)."""
+        return self.top.cohesion
+
+    @property
+    def tan_phi(self) -> Array:
+        """tan phi [-] of the top layer (the surface)."""
+        return self.top.tan_phi
+
+    @property
+    def shear_modulus(self) -> Array:
+        """K [m] of the top layer (the surface)."""
+        return self.top.shear_modulus
+
+    def breakpoint_sinkages(self) -> tuple[Array, ...]:
+        """(z_f,): the sinkage [m] where the ice breaks and the pressure drops."""
+        return (self.failure_sinkage,)
 
     @property
     def failure_sinkage(self) -> Array:
@@ -86,23 +121,11 @@ class LayeredSnow(Terrain):
         return self.bottom.z_w
 
     def constraints(self, shear: str = "classic"):
-        rules = [
-            (f"{part}.{name}", value, ok, allowed)
-            for part, layer in (("top", self.top), ("bottom", self.bottom))
-            for name, value, ok, allowed in WongSnow.constraints(layer, shear)
+        bottom_deeper = self.bottom.z_w > self.top.z_w
+        return [
+            *AbstractTerrain.constraints(self, shear),
+            ("bottom.z_w", self.bottom.z_w, bottom_deeper, "> top.z_w (m)"),
         ]
-        rules.append(
-            ("bottom.z_w", self.bottom.z_w, self.bottom.z_w > self.top.z_w, "> top.z_w (m)")
-        )
-        rules.append(
-            (
-                "ice_failure_pressure",
-                self.ice_failure_pressure,
-                self.ice_failure_pressure > 0,
-                "> 0 Pa",
-            )
-        )
-        return rules
 
     @classmethod
     def reference(cls) -> "LayeredSnow":

@@ -9,8 +9,15 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import (
     DEFAULT_SHEAR_MODULUS,
 )
-from .._leaves import _as_float
-from .base import Terrain, _clip_negative, _safe_power
+from .._leaves import _as_float, parameter
+from .base import (
+    COHESION,
+    SHEAR_MODULUS,
+    TAN_PHI,
+    AbstractTerrain,
+    _clip_negative,
+    _safe_power,
+)
 
 
 def reece_pressure(
@@ -43,7 +50,7 @@ def reece_pressure(
     return modulus * _safe_power(z / b, jnp.asarray(n))
 
 
-class ReeceSoil(Terrain):
+class ReeceSoil(AbstractTerrain):
     """A terrain described by Reece's pressure–sinkage law (2.4) and Mohr–Coulomb (2.5).
 
     On the wheel, `sigma = (c k'_c + gamma_s b k'_phi) (z / b)^n` with b the wheel width
@@ -59,14 +66,26 @@ class ReeceSoil(Terrain):
     - `shear_modulus`: K [m] (keyword; default `DEFAULT_SHEAR_MODULUS` = 10 mm).
     """
 
-    n: Float[Array, "..."] = eqx.field(converter=_as_float)
-    k_c_prime: Float[Array, "..."] = eqx.field(converter=_as_float)
-    k_phi_prime: Float[Array, "..."] = eqx.field(converter=_as_float)
-    unit_weight: Float[Array, "..."] = eqx.field(converter=_as_float)
-    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
-    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
+    n: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("-", "sinkage exponent (2.4)", lower=0.0, open_lower=True),
+    )
+    k_c_prime: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("-", "Reece's cohesive modulus k'_c (2.4)")
+    )
+    k_phi_prime: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("-", "Reece's frictional modulus k'_phi (2.4)")
+    )
+    unit_weight: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "N/m^3", "weight density gamma_s of the terrain (2.4)", lower=0.0, scale=1e4
+        ),
+    )
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=COHESION)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=TAN_PHI)
     shear_modulus: Float[Array, "..."] = eqx.field(
-        converter=_as_float, default=DEFAULT_SHEAR_MODULUS, kw_only=True
+        converter=_as_float, metadata=SHEAR_MODULUS, default=DEFAULT_SHEAR_MODULUS, kw_only=True
     )
 
     def pressure(self, sinkage, width):
@@ -80,15 +99,6 @@ class ReeceSoil(Terrain):
             self.k_phi_prime,
             self.n,
         )
-
-    def constraints(self, shear: str = "classic"):
-        return [
-            ("n", self.n, self.n > 0, "> 0"),
-            ("k_c_prime", self.k_c_prime, self.k_c_prime * 0 == 0, "finite"),
-            ("k_phi_prime", self.k_phi_prime, self.k_phi_prime * 0 == 0, "finite"),
-            ("unit_weight", self.unit_weight, self.unit_weight >= 0, ">= 0 N/m^3"),
-            *Terrain.constraints(self, shear),
-        ]
 
     def wheel_constraints(self, width):
         modulus = self.cohesion * self.k_c_prime + self.unit_weight * width * self.k_phi_prime

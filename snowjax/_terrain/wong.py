@@ -13,8 +13,16 @@ from .._constants import (
     THESIS_DIAMETER,
     THESIS_P_W,
 )
-from .._leaves import _as_float
-from .base import Terrain, _clip_negative
+from .._leaves import _as_float, parameter
+from .base import (
+    COHESION,
+    SHEAR_MODULUS,
+    TAN_PHI,
+    AbstractTerrain,
+    _clip_negative,
+)
+
+STRICT_COHESION = "> 0 Pa (the simplified model is normalised by c)"
 
 
 def wong_sinkage(
@@ -61,7 +69,7 @@ def wong_pressure(
     return jnp.where(below, -jnp.asarray(p_w) * jnp.log1p(-safe), jnp.inf)
 
 
-class WongSnow(Terrain):
+class WongSnow(AbstractTerrain):
     """Shallow snow described by Wong's pressure–sinkage law and Mohr–Coulomb shear.
 
     Pressure–sinkage: `sigma = -p_w ln(1 - z / z_w)` (eq. 2.3 / 4.1); shear strength
@@ -77,11 +85,21 @@ class WongSnow(Terrain):
     - `shear_modulus`: K, the shear deformation modulus of eq. (4.11) [m].
     """
 
-    p_w: Float[Array, "..."] = eqx.field(converter=_as_float)
-    z_w: Float[Array, "..."] = eqx.field(converter=_as_float)
-    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float)
-    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float)
-    shear_modulus: Float[Array, "..."] = eqx.field(converter=_as_float)
+    p_w: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "Pa", "Wong's pressure parameter (2.3)", lower=0.0, open_lower=True, scale=1e4
+        ),
+    )
+    z_w: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "m", "asymptotic sinkage, the depth of the base (2.3)", lower=0.0, open_lower=True
+        ),
+    )
+    cohesion: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=COHESION)
+    tan_phi: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=TAN_PHI)
+    shear_modulus: Float[Array, "..."] = eqx.field(converter=_as_float, metadata=SHEAR_MODULUS)
 
     label: ClassVar[str] = "snow"
 
@@ -95,22 +113,12 @@ class WongSnow(Terrain):
         return self.z_w
 
     def constraints(self, shear: str = "classic"):
-        if shear == "simplified":  # the simplified model is normalised by c
-            cohesion = (
-                "cohesion",
-                self.cohesion,
-                self.cohesion > 0,
-                "> 0 Pa (the simplified model is normalised by c)",
-            )
-        else:
-            cohesion = ("cohesion", self.cohesion, self.cohesion >= 0, ">= 0 Pa")
-        return [
-            ("p_w", self.p_w, self.p_w > 0, "> 0 Pa"),
-            ("z_w", self.z_w, self.z_w > 0, "> 0 m"),
-            cohesion,
-            ("tan_phi", self.tan_phi, self.tan_phi >= 0, ">= 0"),
-            ("shear_modulus", self.shear_modulus, self.shear_modulus > 0, "> 0 m"),
-        ]
+        rules = AbstractTerrain.constraints(self, shear)
+        if shear != "simplified":
+            return rules
+        # The simplified model (4.13) is normalised by c.
+        strict = ("cohesion", self.cohesion, self.cohesion > 0, STRICT_COHESION)
+        return [strict if rule[0] == "cohesion" else rule for rule in rules]
 
     @classmethod
     def reference(cls) -> "WongSnow":

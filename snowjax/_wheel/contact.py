@@ -47,7 +47,7 @@ from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
-from .distribution import WongReece
+from .distribution import AbstractStressDistribution, _as_distribution
 from .general import _general_nodes_for, _rule, general_contact
 from .geometry import RigidWheel, _sincos_half
 
@@ -583,7 +583,7 @@ def contact_forces(
     shear: ShearModel = "classic",
     nodes_per_panel: int | None = None,
     *,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
 ) -> ContactForces:
     """Contact integrals of a rigid wheel on a terrain at a given entry angle.
 
@@ -602,13 +602,15 @@ def contact_forces(
     - `shear`: `"classic"` (4.11), `"simplified"` (4.13; WongSnow without a
       distribution only) or `"none"`.
     - `nodes_per_panel`: Gauss–Legendre nodes per panel (defaults as in `solve_wheel`).
-    - `distribution`: None (front region) or `WongReece`.
+    - `distribution`: `FrontRegion()` or None (front region), `WongReece`, or any
+      `AbstractStressDistribution`.
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
     from .inputs import _check_model, _is_thesis_path
 
     _check_model(wheel, snow, distribution, shear)
+    distribution = _as_distribution(distribution)
     if _is_thesis_path(snow, distribution):
         n = _nodes_for(shear, nodes_per_panel)
         return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, _layout(slip))
@@ -683,13 +685,12 @@ def _general_contact_forces_jit(wheel, terrain, distribution, entry_angle, slip,
     shape, _, (wheel, terrain, distribution, theta0, slip) = _broadcast_leaves(
         wheel, terrain, distribution, entry_angle, slip
     )
-    fractions = None if distribution is None else distribution.angle_fractions(slip)
 
     def forces(braking):
-        fn = lambda th, i, d, b, tr, fr: general_contact(  # noqa: E731
-            th, i, d, b, tr, fr, shear, n[braking], braking
+        fn = lambda th, i, d, b, tr, ds: general_contact(  # noqa: E731
+            th, i, d, b, tr, ds, shear, n[braking], braking
         )
-        return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, fractions)
+        return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, distribution)
 
     w, r, t, m = cast(tuple, _with_rule_for(slip, shear, forces, layout))
     reshape = lambda x: x.reshape(shape)  # noqa: E731

@@ -32,7 +32,6 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
-from .._terrain.layered import LayeredSnow
 from .bracketed import solve_elementwise
 from .contact import (
     ShearModel,
@@ -44,7 +43,7 @@ from .contact import (
     _with_rule_for,
     max_sinkage,
 )
-from .distribution import WongReece
+from .distribution import AbstractStressDistribution, _as_distribution
 from .general import _general_nodes_for, general_contact
 from .geometry import RigidWheel
 from .inputs import (
@@ -397,12 +396,13 @@ def _scan_grid(terrain, dtype):
     s^2 = S_MIN^2, 8 and S_MAX^2 = 16 (theta0 = the cap, e^-8 of it and 1e-7 of it): W is
     monotone except for a braked wheel's backward shear, so the grid only has to start
     Newton, by interpolating ln W linearly in s^2 (exact for a power law) inside the
-    interval that brackets the root.  For a `LayeredSnow`, whose W(theta0) can fall after
-    the ice breaks, s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
+    interval that brackets the root.  For a law with breakpoints
+    (`AbstractTerrain.breakpoint_sinkages`: `LayeredSnow`, whose W(theta0) can fall after
+    the ice breaks), s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
     theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
     peak; a peak narrower than that can be missed (then a deeper root is returned).
     """
-    if isinstance(terrain, LayeredSnow):
+    if terrain.breakpoint_sinkages():
         s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
         s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
     else:
@@ -432,16 +432,17 @@ def _solve_general_layout(
     tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
     theta_cap, reaches_base = _entry_angle_cap(terrain.depth, diameter)
-    fractions = None if distribution is None else distribution.angle_fractions(slip)
 
-    def contact_batch(theta0, vertical_only, i, d, b, tr, fr, sd):  # explicit parameters
-        fn = lambda th, i, d, b, tr, fr, sd: general_contact(  # noqa: E731
-            th, i, d, b, tr, fr, shear, n, braking, vertical_only, sd, bulldozing
+    def contact_batch(theta0, vertical_only, i, d, b, tr, ds, sd):  # explicit parameters
+        fn = lambda th, i, d, b, tr, ds, sd: general_contact(  # noqa: E731
+            th, i, d, b, tr, ds, shear, n, braking, vertical_only, sd, bulldozing
         )
-        return jax.vmap(fn)(theta0, i, d, b, tr, fr, sd)
+        return jax.vmap(fn)(theta0, i, d, b, tr, ds, sd)
 
     def contact(theta0, vertical_only):
-        return contact_batch(theta0, vertical_only, slip, diameter, width, terrain, fractions, side)
+        return contact_batch(
+            theta0, vertical_only, slip, diameter, width, terrain, distribution, side
+        )
 
     def vertical(theta0) -> Array:  # W alone
         return cast(Array, contact(theta0, True))
@@ -485,7 +486,7 @@ def _solve_general_layout(
         jnp.clip(s0, lower, upper),
         lower,
         upper,
-        (theta_cap, target, slip, diameter, width, terrain, fractions, side),
+        (theta_cap, target, slip, diameter, width, terrain, distribution, side),
         tol,
         max_steps,
     )
@@ -498,9 +499,12 @@ def _solve_general_layout(
         return (theta0, *cast(tuple, contact_batch(theta0, False, *element)))
 
     wheel, terrain, distribution, load, slip, side = differentiable
-    fractions = None if distribution is None else distribution.angle_fractions(slip)
     theta_cap = _entry_angle_cap(terrain.depth, wheel.diameter)[0]
-    root = ((over,), load, (theta_cap, slip, wheel.diameter, wheel.width, terrain, fractions, side))
+    root = (
+        (over,),
+        load,
+        (theta_cap, slip, wheel.diameter, wheel.width, terrain, distribution, side),
+    )
     s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
     theta0, w, r, t, m, *lateral = _root_outputs(s, *root, forces=forces)
     fy, mz = lateral if side is not None else (jnp.zeros_like(m), jnp.zeros_like(m))
@@ -597,7 +601,7 @@ def solve_wheel(
     slip: Float[ArrayLike, "..."],
     shear: ShearModel = "classic",
     *,
-    distribution: WongReece | None = None,
+    distribution: AbstractStressDistribution | None = None,
     slip_angle: Float[ArrayLike, "..."] | None = None,
     lateral: Lateral | None = None,
     nodes_per_panel: int | None = None,
@@ -636,7 +640,8 @@ def solve_wheel(
       `-(1 - exp(-|j|/K))`), so a braked wheel gets a negative thrust.
     - `shear`: `"classic"` (Janosi–Hanamoto, 4.11), `"simplified"` (the thesis's model,
       4.13; `WongSnow` without a distribution only) or `"none"` (normal stress only).
-    - `distribution`: None (front region, the thesis) or `WongReece(c1, c2, c3)`.
+    - `distribution`: `FrontRegion()` or None (the thesis's front region), `WongReece(c1,
+      c2, c3)`, or any `AbstractStressDistribution`.
     - `slip_angle`: beta [rad], |beta| < pi/2, broadcasts like `slip`: the angle between
       the wheel's heading and its direction of travel, positive when the wheel moves
       towards -y of its own frame (velocity (V cos beta, -V sin beta); x along the heading,
@@ -703,6 +708,7 @@ def solve_wheel(
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
     _check_model(wheel, terrain, distribution, shear)
+    distribution = _as_distribution(distribution)
     _check_options(nodes_per_panel, max_steps)
     load = _numeric_argument("load", load)
     slip = _numeric_argument("slip", slip)

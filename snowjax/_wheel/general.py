@@ -9,9 +9,10 @@ sinkage, shear stress by Janosi–Hanamoto from the shear displacement 4.10) are
 integrated over theta_r <= theta <= theta0 (0 <= theta <= theta0 without a
 distribution) by composite Gauss–Legendre quadrature.  The interval is cut at every
 angle where an integrand has a kink or a jump: theta_m (peak of the Wong–Reece
-distribution), the sign change of the shear displacement of a braked wheel, and, for
-`LayeredSnow`, the angles where the rim passes the ice layer's failure sinkage (front
-and mirrored rear).  Each piece is split in two halves whose nodes are graded towards
+distribution), the sign change of the shear displacement of a braked wheel, and the
+angles where the rim passes a breakpoint of the terrain's law
+(`AbstractTerrain.breakpoint_sinkages`, e.g. `LayeredSnow`'s ice failure; front and
+mirrored rear).  Each piece is split in two halves whose nodes are graded towards
 their outer ends by `x = end -+ s sinh(mu t^2)`: near an end the node spacing grows
 like t^2, which makes the endpoint behaviour of power laws (sigma ~ (theta0 - theta)^n
 at the entry angle and the exit angle) smooth in t, and s (the width of the shear layer
@@ -32,7 +33,6 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._terrain.layered import LayeredSnow
 from .._terrain.shear import _signed_mobilisation
 from .geometry import _sincos_half
 from .lateral import bulldozing_pressure, combined_mobilisation
@@ -158,7 +158,7 @@ def general_contact(
     diameter,
     width,
     terrain,
-    fractions,
+    distribution,
     shear,
     n,
     braking=True,
@@ -168,8 +168,8 @@ def general_contact(
 ):
     """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
 
-    `fractions` is None (front region only, 0..theta0) or (theta_m / theta0,
-    theta_r / theta0) of the Wong–Reece distribution.  `braking=False` is valid only
+    `distribution` is an `AbstractStressDistribution` (`FrontRegion`: 0..theta0;
+    `WongReece`: theta_r..theta0 with the mirrored rear stresses).  `braking=False` is valid only
     for slip >= 0 (no sign change of the shear displacement).
 
     `side` is None (straight running) or `(tan(beta), K_y, gamma)` of a wheel under slip
@@ -181,12 +181,7 @@ def general_contact(
     dtype = theta0.dtype
     r = diameter / 2
     inf = jnp.asarray(jnp.inf, dtype)
-    if fractions is None:
-        theta_m = jnp.zeros_like(theta0)
-        theta_r = jnp.zeros_like(theta0)
-    else:
-        theta_m = fractions[0] * theta0
-        theta_r = fractions[1] * theta0
+    theta_r = distribution.exit_angle(theta0, slip)
 
     _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
     entry_slope = jnp.abs(1 - (1 - slip) * jnp.cos(theta0))
@@ -202,25 +197,23 @@ def general_contact(
         entry_scale = inf
 
     points = [(theta_r, inf), (theta0, entry_scale)]
-    if fractions is not None:
-        points.append((theta_m, inf))
+    points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     if braking and shear != "none":
         split, has_root = _braking_split(theta0, theta_r, slip, diameter)
         split = jax.lax.stop_gradient(split)
-        z_split = _rim_sinkage_between(jnp.where(split >= theta_m, split, theta0), theta0, diameter)
+        z_split = _rim_sinkage_between(
+            distribution.stress_angle(split, theta0, slip), theta0, diameter
+        )
         k_split = terrain.rim_properties(z_split, width)[3]
         slope = jnp.abs(-1 + (1 - slip) * jnp.cos(split))
         split_scale = jnp.where(has_root, k_split / (r * jnp.maximum(slope, 1e-12)), inf)
         points.append((split, split_scale))
-    if isinstance(terrain, LayeredSnow):
-        # Rim angle where the sinkage equals the ice layer's failure sinkage (front),
+    for breakpoint in terrain.breakpoint_sinkages():
+        # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
         # and its mirror image in the rear region.
-        theta_f = _safe_arccos(jnp.cos(theta0) + terrain.failure_sinkage / r)
+        theta_f = _safe_arccos(jnp.cos(theta0) + breakpoint / r)
         points.append((theta_f, inf))
-        if fractions is not None:
-            span = jnp.where(theta0 > theta_m, theta0 - theta_m, 1.0)
-            rear = theta_r + (theta0 - theta_f) / span * (theta_m - theta_r)
-            points.append((rear, inf))
+        points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
 
     angles = jnp.clip(jnp.stack([p[0] for p in points]), theta_r, theta0)
     scales = jnp.stack([jnp.broadcast_to(p[1], theta0.shape) for p in points])
@@ -229,13 +222,8 @@ def general_contact(
     scales = scales[order]
     theta, weight = _graded_half_panels(angles[:-1], angles[1:], scales[:-1], scales[1:], n, dtype)
 
-    # Normal stress: front region at the rim sinkage, rear region at the mirrored angle.
-    if fractions is None:
-        theta_eff = theta
-    else:
-        span = jnp.where(theta_m > theta_r, theta_m - theta_r, 1.0)
-        mirrored = theta0 - (theta - theta_r) / span * (theta0 - theta_m)
-        theta_eff = jnp.where(theta >= theta_m, theta, mirrored)
+    # Normal stress: the terrain's law at the rim sinkage of the distribution's angle.
+    theta_eff = distribution.stress_angle(theta, theta0, slip)
     z = _below_base(_rim_sinkage_between(theta_eff, theta0, diameter), terrain.depth)
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
     half_sin, half_cos = _sincos_half(theta)

@@ -8,7 +8,7 @@ import numpy as np
 from jaxtyping import Array, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
-from .._leaves import _as_float, _check_real_leaves
+from .._leaves import _as_float, _check_real_leaves, parameter
 
 
 class RigidWheel(eqx.Module):
@@ -22,8 +22,12 @@ class RigidWheel(eqx.Module):
 
     __check_init__ = _check_real_leaves
 
-    diameter: Float[Array, "..."] = eqx.field(converter=_as_float)
-    width: Float[Array, "..."] = eqx.field(converter=_as_float)
+    diameter: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("m", "wheel diameter D", lower=0.0, open_lower=True)
+    )
+    width: Float[Array, "..."] = eqx.field(
+        converter=_as_float, metadata=parameter("m", "wheel width b", lower=0.0, open_lower=True)
+    )
 
     @property
     def radius(self) -> Array:

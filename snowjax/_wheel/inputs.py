@@ -16,7 +16,7 @@ from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
 from .._terrain.wong import WongSnow
 from .contact import _check_shear
-from .distribution import WongReece
+from .distribution import AbstractStressDistribution, FrontRegion
 from .geometry import RigidWheel
 
 # ---------------------------------------------------------------------------------------
@@ -157,7 +157,8 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
 
     Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
     """
-    known = _checked_parameters(wheel, terrain, shear) if distribution is None else None
+    front = _is_front(distribution)
+    known = _checked_parameters(wheel, terrain, shear) if front else None
     parameter_key = (
         known if known is not None else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
     )
@@ -173,7 +174,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
             )
             rules = _checks(w, t, d, ld, sl, shear)
     _check_rules(rules, dtype, small, large)
-    if known is None and distribution is None:
+    if known is None and front:
         _remember_checked(wheel, terrain, shear, parameter_key)
 
 
@@ -273,11 +274,12 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
             f"LayeredSnow), got {type(terrain).__name__}"
         )
-    if distribution is not None and not isinstance(distribution, WongReece):
+    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
         raise TypeError(
-            f"distribution must be None or a snowjax.WongReece, got {type(distribution).__name__}"
+            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
+            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
-    if shear == "simplified" and (distribution is not None or not isinstance(terrain, WongSnow)):
+    if shear == "simplified" and not (_is_front(distribution) and isinstance(terrain, WongSnow)):
         raise ValueError(
             "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
             "of the contact: it needs a WongSnow terrain and distribution=None; use "
@@ -285,6 +287,11 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
         )
 
 
+def _is_front(distribution) -> bool:
+    """Whether the distribution is the thesis's front region (`None` or `FrontRegion()`)."""
+    return distribution is None or isinstance(distribution, FrontRegion)
+
+
 def _is_thesis_path(terrain, distribution) -> bool:
     """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
-    return distribution is None and isinstance(terrain, WongSnow)
+    return _is_front(distribution) and isinstance(terrain, WongSnow)

@@ -52,7 +52,7 @@ import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
-from .._leaves import _as_float, _check_real_leaves
+from .._leaves import _as_float, _check_real_leaves, _parameter_rules, parameter
 
 __all__ = ["Lateral"]
 
@@ -75,19 +75,31 @@ class Lateral(eqx.Module):
 
     __check_init__ = _check_real_leaves
 
-    shear_modulus: Float[Array, "..."] | None = eqx.field(converter=_as_float, default=None)
-    unit_weight: Float[Array, "..."] = eqx.field(converter=_as_float, default=0.0)
+    shear_modulus: Float[Array, "..."] | None = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "m",
+            "lateral shear deformation modulus K_y (None: the terrain's K)",
+            lower=0.0,
+            open_lower=True,
+            scale=0.01,
+        ),
+        default=None,
+    )
+    unit_weight: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "N/m^3", "unit weight gamma of the terrain (bulldozing)", lower=0.0, scale=1e4
+        ),
+        default=0.0,
+    )
     bulldozing: bool = eqx.field(static=True, default=False)
 
     def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity per element: (name, value, ok mask, allowed range)."""
-        rules = [
-            ("lateral.unit_weight", self.unit_weight, self.unit_weight >= 0, ">= 0 N/m^3"),
+        return [
+            (f"lateral.{name}", v, ok, allowed) for name, v, ok, allowed in _parameter_rules(self)
         ]
-        if self.shear_modulus is not None:
-            k = self.shear_modulus
-            rules.append(("lateral.shear_modulus", k, k > 0, "> 0 m"))
-        return rules
 
 
 def combined_mobilisation(a: Array, b: Array) -> tuple[Array, Array]:
