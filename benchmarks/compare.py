@@ -1,4 +1,4 @@
-"""Compare the Wong-snow front-region path of two revisions, interleaved, on this machine.
+"""Compare the wheel solver of two revisions, interleaved, on this machine.
 
     python benchmarks/compare.py 2280f0c            # that revision vs the working tree
     python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --readme
@@ -11,7 +11,9 @@ each tree over all rounds.  Rows: `solve_wheel` throughput at batch 1 to 100,000
 tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the
 in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and the cost of
 one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200 steps of
-10 ms).  `--readme` writes the
+10 ms); the first call of a fresh process (compile, batch 1); and the general quadrature:
+Bekker's Snow (U.S.) with Wong–Reece and the layered snow on the front region, batches 1
+and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  `--readme` writes the
 table between `<!-- compare:start -->` and `<!-- compare:end -->` in README.md.
 """
 
@@ -53,6 +55,10 @@ def measure() -> dict[str, float]:
             times.append(time.perf_counter() - t)
         return min(times)
 
+    t0 = time.perf_counter()  # a fresh process: the first call compiles
+    sj.solve_wheel(wheel, snow, 5000.0, 0.3).entry_angle.block_until_ready()
+    out["first call (compile), batch 1"] = time.perf_counter() - t0
+
     for n in SIZES:
         load, slip = rng.uniform(1e3, 9e3, n), rng.uniform(0.0, 0.9, n)
         run = lambda: sj.solve_wheel(wheel, snow, load, slip).entry_angle.block_until_ready()  # noqa: E731,B023
@@ -74,11 +80,26 @@ def measure() -> dict[str, float]:
     out["simulate_longitudinal, per wheel-step"] = best(lambda: jax.block_until_ready(sim()), 3) / (
         200 * 4
     )
+    # Other terrains and the Wong–Reece distribution (the general quadrature).
+    others = {
+        "Bekker snow (U.S.), Wong–Reece": (sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32)),
+        "layered snow, front region": (sj.LayeredSnow.ice_layer_example(), None),
+    }
+    for label, (terrain, dist) in others.items():
+        for n in (1, 1_000):
+            load, slip = rng.uniform(300.0, 900.0, n), rng.uniform(-0.3, 0.9, n)
+
+            def run(terrain=terrain, load=load, slip=slip, dist=dist):
+                st = sj.solve_wheel(wheel, terrain, load, slip, distribution=dist)
+                st.entry_angle.block_until_ready()
+
+            out[f"{label}, batch {n:,}"] = best(run, 30 if n == 1 else 5)
     return out
 
 
 def _run_tree(tree: pathlib.Path) -> dict[str, float]:
     env = dict(os.environ, PYTHONPATH=str(tree), JAX_PLATFORMS="cpu")
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)  # the first call must compile
     code = (
         f"import sys, json; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); "
         "import compare; print(json.dumps(compare.measure()))"
@@ -97,9 +118,11 @@ def _run_tree(tree: pathlib.Path) -> dict[str, float]:
 
 
 def _fmt(name: str, seconds: float) -> str:
-    if name.startswith("batch"):
-        n = int(name.split()[1].replace(",", ""))
+    if "batch" in name and not name.startswith("first"):
+        n = int(name.rsplit("batch ", 1)[1].replace(",", ""))
         return f"{n / seconds:,.0f} /s"
+    if seconds >= 0.1:
+        return f"{seconds:.2f} s"
     return f"{seconds * 1e6:.1f} us"
 
 
@@ -158,7 +181,7 @@ def main(argv=None) -> None:
         f"Old: {old_rev}; new: {new_rev}. Best of {args.rounds} interleaved "
         f"rounds each ({time.strftime('%Y-%m-%d')}).",
         "",
-        f"| Wong snow, front region | {old_rev} | {new_rev} | new / old time |",
+        f"| row (Wong snow, front region unless named) | {old_rev} | {new_rev} | new / old time |",
         "|---|---|---|---|",
     ]
     for name in best["old"]:

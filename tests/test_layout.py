@@ -154,3 +154,24 @@ def test_a_new_terrain_law_is_one_class(make):
         np.testing.assert_allclose(a.drawbar_pull, b.drawbar_pull, rtol=1e-10)
     with pytest.raises(ValueError, match=r"terrain\.cohesion must be finite and >= 0 Pa"):
         sj.solve_wheel(wheel, LinearSoil(2e6, -1.0, 0.4, 0.01), 2e3, 0.1)
+
+
+def test_wheel_and_terrain_functions_are_under_100_lines_of_code():
+    """No function of the wheel core (`_wheel/`, `_terrain/`) holds over 100 lines of code
+    (its docstring, comment lines and blank lines not counted)."""
+    long = []
+    for path in sorted((PKG / "_wheel").glob("*.py")) + sorted((PKG / "_terrain").glob("*.py")):
+        lines = path.read_text().splitlines()
+        for node in ast.walk(ast.parse("\n".join(lines))):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            body = node.body
+            if isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+                body = body[1:]  # the docstring
+            if not body:
+                continue
+            span = lines[body[0].lineno - 1 : body[-1].end_lineno]
+            code = [x for x in span if x.strip() and not x.strip().startswith("#")]
+            if len(code) > 100:
+                long.append(f"{path.relative_to(PKG.parent)}::{node.name} ({len(code)} lines)")
+    assert not long, long

@@ -133,6 +133,34 @@ def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
     assert np.allclose(f.drawbar_pull, f.thrust - f.motion_resistance)
 
 
+@pytest.mark.parametrize("kind", KINDS)
+def test_per_point_stresses_on_every_terrain_and_distribution(kind):
+    """`normal_stress` / `shear_stress` at rim angles across the contact (front and, with
+    Wong–Reece, rear region) against the laws written by hand: sigma of the rim sinkage
+    at the stress angle (mirrored in the rear), Janosi–Hanamoto on (4.10); 1e-12."""
+    c = random_cases(kind, 1, seed=7)[0]
+    terrain = terrain_of(kind, c)
+    law, z_f = law_of(kind, c)
+    wheel = sj.RigidWheel(c["D"], c["b"])
+    r, th0, slip = c["D"] / 2, c["th"], c["slip"]
+    for wong_reece in (False, True):
+        fm, fr = fractions(c, wong_reece)
+        tm, tr = fm * th0, fr * th0
+        dist = sj.WongReece(c["c1"], c["c2"], c["c3"]) if wong_reece else None
+        thetas = np.linspace(tr, th0, 9)[1:-1]
+        sigma = sj.normal_stress(thetas, th0, wheel, terrain, slip=slip, distribution=dist)
+        tau = sj.shear_stress(thetas, th0, slip, wheel, terrain, distribution=dist)
+        for k, th in enumerate(thetas):
+            te = th if th >= tm else th0 - (th - tr) / (tm - tr) * (th0 - tm)
+            z = r * (math.cos(te) - math.cos(th0))
+            sig = law(z, c["b"])
+            j = r * ((th0 - th) - (1 - slip) * (math.sin(th0) - math.sin(th)))
+            cc, tp, kk = c["c"], c["tp"], c["K"]  # the layers share c, tan phi and K here
+            expected_tau = (cc + sig * tp) * math.copysign(-math.expm1(-abs(j / kk)), j)
+            assert float(sigma[k]) == pytest.approx(sig, rel=1e-12, abs=1e-9), (wong_reece, th)
+            assert float(tau[k]) == pytest.approx(expected_tau, rel=1e-11, abs=1e-9)
+
+
 EQUILIBRIUM_CASES = {
     "bekker": (sj.BekkerSoil.snow_us(), [(800.0, 0.3), (1000.0, -0.3)]),
     "reece": (

@@ -44,11 +44,11 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._leaves import _is_traced
-from .._terrain.base import Terrain
+from .._terrain.base import AbstractTerrain
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
-from .distribution import AbstractStressDistribution, _as_distribution
-from .general import _general_nodes_for, _rule, general_contact
+from .distribution import AbstractStressDistribution, FrontRegion, _as_distribution
+from .general import _general_nodes_for, _rim_sinkage_between, _rule, general_contact
 from .geometry import RigidWheel, _sincos_half
 
 ShearModel = Literal["classic", "simplified", "none"]
@@ -132,18 +132,42 @@ def _relative_sinkage_at_axle(entry_angle, diameter, z_w):
 
 
 def normal_stress(
-    theta: ArrayLike, entry_angle: ArrayLike, wheel: RigidWheel, snow: WongSnow
+    theta: ArrayLike,
+    entry_angle: ArrayLike,
+    wheel: RigidWheel,
+    snow: AbstractTerrain,
+    *,
+    slip: ArrayLike = 0.0,
+    distribution: AbstractStressDistribution | None = None,
 ) -> Array:
-    """Normal stress on the rim from Wong's law, eq. (4.1b) with the geometry of (4.5).
+    """Normal stress on the rim at angle theta: the terrain's pressure–sinkage law at the
+    rim sinkage (4.5) of the distribution's stress angle.
 
-    `sigma = -p_w ln Z`, `Z = 1 - z / z_w = Z0 + (D / z_w) sin^2(theta / 2)`.
+    On `WongSnow` with the front region this is eq. (4.1b) written as `sigma = -p_w ln Z`,
+    `Z = 1 - z / z_w = Z0 + (D / z_w) sin^2(theta / 2)` (no cancellation near the entry).
+    On any terrain and distribution, `sigma = terrain.pressure(z)` with
+    `z = r (cos theta* - cos theta0)`, theta* = `distribution.stress_angle(theta, ...)`
+    (theta in the front region, the mirrored front angle in Wong–Reece's rear region).
 
-    **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `wheel`, `snow`.
-    **Returns:** sigma [Pa]; `+inf` only at theta = 0 of a bottomed-out wheel.
+    **Arguments:** `theta` [rad] (in theta_r..theta0), `entry_angle` theta0 [rad],
+    `wheel`, `snow` (any terrain); keywords: `slip` i [-] (where the distribution
+    depends on it: Wong–Reece's theta_m), `distribution` (None: the front region).
+    **Returns:** sigma [Pa]; `+inf` only at theta = 0 of a wheel resting on a Wong base.
     """
-    z0_rel = _relative_sinkage_at_axle(entry_angle, wheel.diameter, snow.z_w)
-    big_z = z0_rel + wheel.diameter / snow.z_w * jnp.sin(jnp.asarray(theta) / 2) ** 2
-    return -snow.p_w * jnp.log(big_z)
+    distribution = _as_distribution(distribution)
+    if isinstance(snow, WongSnow) and isinstance(distribution, FrontRegion):
+        z0_rel = _relative_sinkage_at_axle(entry_angle, wheel.diameter, snow.z_w)
+        big_z = z0_rel + wheel.diameter / snow.z_w * jnp.sin(jnp.asarray(theta) / 2) ** 2
+        return -snow.p_w * jnp.log(big_z)
+    return _rim_stress_properties(theta, entry_angle, slip, wheel, snow, distribution)[0]
+
+
+def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution):
+    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain."""
+    theta0 = jnp.asarray(entry_angle)
+    stress_angle = distribution.stress_angle(jnp.asarray(theta), theta0, slip)
+    z = _rim_sinkage_between(stress_angle, theta0, wheel.diameter)
+    return terrain.rim_properties(z, wheel.width)
 
 
 def _simplified_coefficients(entry_angle, diameter, snow):
@@ -164,14 +188,17 @@ def shear_stress(
     entry_angle: ArrayLike,
     slip: ArrayLike,
     wheel: RigidWheel,
-    snow: WongSnow,
+    snow: AbstractTerrain,
     shear: ShearModel = "classic",
+    *,
+    distribution: AbstractStressDistribution | None = None,
 ) -> Array:
     """Shear stress on the rim [Pa] for one of the thesis's shear models.
 
     - `"classic"`: Janosi–Hanamoto with the rigid-wheel shear displacement, eq. (4.11):
-      `tau = (c + sigma tan phi)[1 - exp(-j / K)]`.
-    - `"simplified"`: the thesis's model, eq. (4.13):
+      `tau = (c + sigma tan phi)[1 - exp(-j / K)]`, on any terrain and distribution (c,
+      tan phi and K those acting at the stress angle's sinkage: `rim_properties`).
+    - `"simplified"`: the thesis's model, eq. (4.13) (`WongSnow`, front region only):
       `tau = c (1 + sigma_bar tan phi)[1 - exp(-U0)]`, `sigma_bar = sigma / c`,
       `U0 = (i + tau2) tau1 sigma_bar + (2i - i^2) tau1 sigma_bar^3 / 6`,
       `tau1 = (D / K)(z_w / D)(c / p_w) cot theta0`, `tau2 = 1 / cos theta0 - 1`, with tau1
@@ -183,11 +210,23 @@ def shear_stress(
     `-[1 - exp(-|j| / K)]`, so the stress is signed and bounded by Mohr–Coulomb.
 
     **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `slip` i [-], `wheel`,
-    `snow`, `shear` (model name).
+    `snow` (any terrain), `shear` (model name); keyword `distribution` (None: the front
+    region).
     """
-    _check_shear(shear)
-    sigma = normal_stress(theta, entry_angle, wheel, snow)
-    return _shear_from_sigma(sigma, theta, entry_angle, slip, wheel.diameter, snow, shear)
+    from .inputs import _check_model
+
+    _check_model(wheel, snow, distribution, shear)
+    distribution = _as_distribution(distribution)
+    if isinstance(snow, WongSnow) and isinstance(distribution, FrontRegion):
+        sigma = normal_stress(theta, entry_angle, wheel, snow)
+        return _shear_from_sigma(sigma, theta, entry_angle, slip, wheel.diameter, snow, shear)
+    sigma, c, tan_phi, k = _rim_stress_properties(
+        theta, entry_angle, slip, wheel, snow, distribution
+    )
+    if shear == "none":
+        return jnp.zeros_like(sigma)
+    j = shear_displacement(theta, entry_angle, slip, wheel.diameter)
+    return (c + sigma * tan_phi) * _signed_mobilisation(j / k)
 
 
 def _shear_from_sigma(sigma, theta, entry_angle, slip, diameter, snow, shear):
@@ -577,7 +616,7 @@ def _contact_scalar(
 
 def contact_forces(
     wheel: RigidWheel,
-    snow: Terrain,
+    snow: AbstractTerrain,
     entry_angle: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     shear: ShearModel = "classic",
