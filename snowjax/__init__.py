@@ -21,6 +21,10 @@ from ._wheel.distribution import AbstractStressDistribution as AbstractStressDis
 from ._wheel.distribution import FrontRegion as FrontRegion
 from ._wheel.distribution import WongReece as WongReece
 from ._wheel.lateral import Lateral as Lateral
+from ._wheel.shear_law import AbstractShearLaw as AbstractShearLaw
+from ._wheel.shear_law import JanosiHanamoto as JanosiHanamoto
+from ._wheel.shear_law import NoShear as NoShear
+from ._wheel.shear_law import ThesisSimplified as ThesisSimplified
 from ._terrain.bekker import bekker_pressure as bekker_pressure
 from ._terrain.shear import gawwad_crolla_shear as gawwad_crolla_shear
 from ._terrain.shear import gawwad_crolla_unloading_pressure as gawwad_crolla_unloading_pressure

@@ -115,6 +115,7 @@ from ._wheel.contact import ShearModel
 from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import RigidWheel
+from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
     "MjxWheels",
@@ -515,7 +516,7 @@ def step(
     entry_angle: Float[ArrayLike, " n"] | None = None,
     *,
     load: Float[ArrayLike, " n"] | str | None = None,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
     distribution: AbstractStressDistribution | None = None,
 ) -> tuple[mjx.Data, MjxWheelForces]:
@@ -543,7 +544,8 @@ def step(
       `"contact"`: the floor's normal force on the wheel in the previous step (module
       documentation; includes load transfer, but see its caveat).
     - `shear`, `speed_eps`, `distribution`: as in `snowjax.wheel_forces` (shear model;
-      regularisation speed [m/s]; `None` or a `WongReece` stress distribution).
+      regularisation speed [m/s]; `None`, `FrontRegion()`, `WongReece` or another
+      stress distribution).
 
     **Returns:** `(next mjx.Data, MjxWheelForces)`; its `xfrc_applied` holds the snow
     wrenches that were applied.
@@ -555,6 +557,7 @@ def step(
     `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
     `Status.INVALID_INPUT`.
     """
+    shear = _shear_name(shear)
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
@@ -636,7 +639,7 @@ def rollout(
     *,
     entry_angle: Float[ArrayLike, " n"] | None = None,
     load: Float[ArrayLike, " n"] | str | None = None,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
     distribution: AbstractStressDistribution | None = None,
 ) -> Rollout:
@@ -650,6 +653,7 @@ def rollout(
 
     **Returns:** `Rollout`.
     """
+    shear = _shear_name(shear)
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     num_steps = int(num_steps)
     if num_steps < 1:

@@ -23,6 +23,9 @@ import snowjax as sj
 
 from . import reference_terrain as ref
 
+# The reference's quad warns about round-off at its 1e-13 target on a few subintervals.
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+
 
 class HyperbolicSnow(sj.AbstractTerrain):
     """sigma = k z / (1 - z / h) [Pa]: linear at first, diverging at the base z = h."""
@@ -208,3 +211,23 @@ def test_sweep_rows_equal_solve_wheel(tmp_path):
     )
     np.testing.assert_allclose(rows["sinkage"], st.sinkage, rtol=1e-12)
     np.testing.assert_allclose(rows["drawbar_pull"], st.drawbar_pull, rtol=1e-10, atol=1e-9)
+
+
+def test_shear_laws_are_modules_or_their_names():
+    """`shear=` takes a shear-law module or its name, with the same result; a law says
+    what it needs (the thesis's simplified law: Wong snow on the front region)."""
+    by_name = _solve(distribution=_full(REAR))
+    by_module = sj.solve_wheel(
+        _full(WHEEL), _full(SNOW), LOADS, SLIPS, sj.JanosiHanamoto(), distribution=_full(REAR)
+    )
+    np.testing.assert_array_equal(by_name.drawbar_pull, by_module.drawbar_pull)
+    assert sj.NoShear().name == "none" and sj.ThesisSimplified().name == "simplified"
+    with pytest.raises(ValueError, match="needs a WongSnow terrain"):
+        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, sj.ThesisSimplified())
+    with pytest.raises(ValueError, match="shear must be one of"):
+        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, "wet")
+    fresh = sj.WongSnow.thesis_fresh_snow()
+    thesis = sj.solve_wheel(WHEEL, fresh, 3000.0, 0.2, sj.ThesisSimplified())
+    assert float(thesis.drawbar_pull) == float(
+        sj.solve_wheel(WHEEL, fresh, 3000.0, 0.2, "simplified").drawbar_pull
+    )

@@ -631,3 +631,30 @@ def test_half_angle_taylor_polynomials_match_numpy_sine_and_cosine():
     half_sin32, half_cos32 = _sincos_half(jnp.asarray(theta, jnp.float32))
     np.testing.assert_allclose(np.asarray(half_sin32), np.sin(theta / 2), rtol=0, atol=3e-7)
     np.testing.assert_allclose(np.asarray(half_cos32), np.cos(theta / 2), rtol=0, atol=3e-7)
+
+
+def test_bracketed_newton_reports_its_real_result():
+    """A root is `successful`; a bracket that collapses onto a jump of f (no root) ends
+    the solve too, but with `nonlinear_divergence`, not success."""
+    import lineax as lx
+    import optimistix as optx
+
+    from snowjax._wheel.bracketed import BracketedNewton
+
+    def solve(fn):
+        return optx.root_find(
+            lambda y, _: fn(y),
+            BracketedNewton(rtol=1e-12, atol=1e-12),
+            jnp.array([0.3, 0.6]),
+            options=dict(lower=jnp.zeros(2), upper=jnp.ones(2)),
+            max_steps=200,
+            throw=False,
+            tags=frozenset({lx.diagonal_tag}),
+        )
+
+    smooth = solve(lambda y: 0.5 - y**2)
+    assert smooth.result == optx.RESULTS.successful
+    np.testing.assert_allclose(smooth.value, np.sqrt(0.5), rtol=1e-12)
+    jump = solve(lambda y: jnp.where(y < 0.4, 1.0, -1.0) * (1 + y))
+    assert jump.result == optx.RESULTS.nonlinear_divergence
+    np.testing.assert_allclose(jump.value, 0.4, atol=1e-11)

@@ -33,6 +33,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
 from .._wheel.geometry import RigidWheel
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]
 
@@ -123,7 +124,7 @@ def tire_forces_on_snow(
     slip: Float[ArrayLike, "..."],
     slip_angle: Float[ArrayLike, "..."],
     *,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     distribution: AbstractStressDistribution | None = None,
     coefficients: TireCoefficients | None = None,
     parameters: TireParameters | None = None,
@@ -185,7 +186,8 @@ def tire_forces_on_snow(
     - `slip_angle`: α [rad], |α| < π/2; the lateral force has its sign.
     - `shear`: the shear model of the chapter-4 equilibrium, `"classic"` (4.11),
       `"simplified"` (4.13) or `"none"` (see [`snowjax.solve_wheel`][]).
-    - `distribution`: None (the thesis's front region) or [`snowjax.WongReece`][].
+    - `distribution`: None or `FrontRegion()` (the thesis's front region),
+      [`snowjax.WongReece`][] or another stress distribution.
     - `coefficients`: [`snowjax.TireCoefficients`][] of the load functions (**kN units**);
       default the thesis's.
     - `parameters`: [`snowjax.TireParameters`][] (C_s, C_α in N/rad) used instead of the
@@ -202,6 +204,7 @@ def tire_forces_on_snow(
     Example: `snowjax.tire_forces_on_snow(snowjax.RigidWheel.thesis_tire(),
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
+    shear = _shear_name(shear)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")
     if parameters is not None and not isinstance(parameters, TireParameters):

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import cast
 
 import equinox as eqx
 import jax
@@ -41,6 +40,7 @@ from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .core import (
     FitResult,
     NonFiniteModelError,
@@ -417,7 +417,7 @@ def fit_wheel(
     drawbar_pull: Float[ArrayLike, " m"] | None = None,
     motion_resistance: Float[ArrayLike, " m"] | None = None,
     fit: Sequence[str] = ("p_w", "z_w", "tan_phi"),
-    shear: str = "classic",
+    shear: str | AbstractShearLaw = "classic",
     scale: dict[str, float] | None = None,
     max_steps: int = 100,
     nodes_per_panel: int | None = None,
@@ -498,7 +498,7 @@ def fit_wheel(
       length; at least one of them.
     - `fit`: names of the parameters to fit (see above; a non-empty subset of
       `fit_parameter_names(snow, distribution)`).
-    - `shear`: `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`;
+    - `shear`: a shear law or its name, `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`;
       `"simplified"` only for `WongSnow` without a distribution).
     - `scale`: optional residual scale per quantity [m or N] (scalar or per point), see
       above.
@@ -530,6 +530,7 @@ def fit_wheel(
     compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
     a second.
     """
+    shear = _shear_name(shear)
     if not isinstance(wheel, RigidWheel):
         raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
     if not isinstance(snow, Terrain):
@@ -552,9 +553,7 @@ def fit_wheel(
         lateral = None
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral)
     max_steps = check_max_steps(max_steps)
-    if shear not in ("classic", "simplified", "none"):
-        raise ValueError(f"shear must be 'classic', 'simplified' or 'none', got {shear!r}")
-    shear_model = cast(ShearModel, shear)  # one of the three, checked above
+    shear_model: ShearModel = shear
     _check_model(wheel, snow, distribution, shear_model)
 
     measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,

@@ -27,6 +27,7 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .planar import (
     NUM_WHEELS,
     PlanarTrajectory,
@@ -196,7 +197,7 @@ def simulate_planar(
     initial_speed: Float[ArrayLike, ""] = 0.0,
     initial_yaw_rate: Float[ArrayLike, ""] = 0.0,
     initial_wheel_speed: Float[ArrayLike, "..."] | None = None,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     lateral: Lateral | None = None,
     speed_eps: float = DEFAULT_SPEED_EPS,
     save_every: int = 1,
@@ -297,6 +298,7 @@ def simulate_planar(
     that cannot be solved even after the retries stops the integration: `result` is set
     (no exception) and the remaining rows hold inf states.
     """
+    shear = _shear_name(shear)
     if shear == "simplified":
         raise ValueError(
             "shear='simplified' (eq. 4.13) has no lateral counterpart: use shear='classic' "

@@ -47,6 +47,7 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .levenberg_marquardt import _LevenbergMarquardt
 from .vehicle import (
     DEFAULT_SPEED_EPS,
@@ -291,7 +292,7 @@ def simulate_longitudinal(
     *,
     initial_speed: Float[ArrayLike, ""] = 0.0,
     initial_wheel_speed: Float[ArrayLike, "..."] | None = None,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
     save_every: int = 1,
     adjoint: diffrax.AbstractAdjoint | None = None,
@@ -368,6 +369,7 @@ def simulate_longitudinal(
     differentiated they make lineax raise on the non-finite values inside the implicit
     solves, so optimise positive parameters through their logarithms.
     """
+    shear = _shear_name(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
     n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)

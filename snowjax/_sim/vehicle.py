@@ -93,6 +93,7 @@ from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _validate_eagerly
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -277,7 +278,7 @@ def wheel_forces(
     load: Float[ArrayLike, "..."],
     wheel: RigidWheel,
     snow: Terrain,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     *,
     speed_eps: float = DEFAULT_SPEED_EPS,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
@@ -338,6 +339,7 @@ def wheel_forces(
     range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
+    shear = _shear_name(shear)
     _check_dynamic_shear(shear, "wheel_forces")
     _check_model(wheel, snow, distribution, shear)
     _check_parameters(wheel, snow, distribution, shear)

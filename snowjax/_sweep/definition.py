@@ -32,7 +32,6 @@ _OUTPUT_FIELDS = (
     "torque",
 )
 _FORMATS = ("npz", "csv")
-_SHEAR_MODELS = ("classic", "simplified", "none")
 _OUTPUT_FILES = {"npz": "sweep.npz", "csv": "sweep.csv"}
 # Every file a sweep writes (resume=False deletes exactly these).
 _OUR_FILES = re.compile(
@@ -306,8 +305,6 @@ def _define(
 
     from .._wheel.equilibrium import _check_model
 
-    if shear not in _SHEAR_MODELS:
-        raise ValueError(f"sweep: shear must be one of {_SHEAR_MODELS}, got {shear!r}")
     if nodes_per_panel is not None and (
         isinstance(nodes_per_panel, bool) or int(nodes_per_panel) < 2
     ):

@@ -70,6 +70,7 @@ from jaxtyping import ArrayLike, Float
 from .._terrain.base import Terrain
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.geometry import RigidWheel
+from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .definition import (
     _FORMATS,
     _OUR_FILES,
@@ -346,7 +347,7 @@ def sweep(
     loads: Float[ArrayLike, " loads"],
     slips: Float[ArrayLike, " slips"],
     *,
-    shear: str = "classic",
+    shear: str | AbstractShearLaw = "classic",
     distribution: AbstractStressDistribution | Sequence[AbstractStressDistribution] | None = None,
     out: str | os.PathLike = "snowjax-sweep",
     chunk_size: int = 8192,
@@ -380,7 +381,7 @@ def sweep(
       set p takes element p of each of them (zipped).
     - `loads`: wheel loads F_z [N], > 0 (scalar or 1-D).
     - `slips`: driving slips i [-] in [-1, 1] (scalar or 1-D).
-    - `shear`: `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
+    - `shear`: a shear law or its name, `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
       `"simplified"` needs a `WongSnow` and no distribution).
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
       `WongReece` or another `AbstractStressDistribution`
@@ -424,6 +425,10 @@ def sweep(
     **Errors:** `ValueError` for out-of-range inputs (naming them), mismatched lengths,
     bad options, or an `out` directory holding a different sweep.
     """
+    try:
+        shear = _shear_name(shear)
+    except ValueError as err:
+        raise ValueError(f"sweep: {err}") from None
     import jax
 
     start_time = time.perf_counter()

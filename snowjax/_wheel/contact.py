@@ -35,7 +35,7 @@ its default nodes, where the panels are placed by the linear width of the shear 
 
 from __future__ import annotations
 
-from typing import Literal, cast
+from typing import cast
 
 import equinox as eqx
 import jax
@@ -50,8 +50,8 @@ from .._terrain.wong import WongSnow
 from .distribution import AbstractStressDistribution, FrontRegion, _as_distribution
 from .general import _general_nodes_for, _rim_sinkage_between, _rule, general_contact
 from .geometry import RigidWheel, _sincos_half
+from .shear_law import AbstractShearLaw, ShearModel, _shear_name
 
-ShearModel = Literal["classic", "simplified", "none"]
 SHEAR_MODELS = ("classic", "simplified", "none")
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
 # four-panel rule otherwise: one count per panel, axle to entry), chosen so that every
@@ -76,9 +76,9 @@ def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, tuple[int,
     return n, (n, n, n, n)
 
 
-def _check_shear(shear: str) -> None:
-    if shear not in SHEAR_MODELS:
-        raise ValueError(f"shear must be one of {SHEAR_MODELS}, got {shear!r}")
+def _check_shear(shear) -> None:
+    """`ValueError` unless `shear` is a shear-law module or its name."""
+    _shear_name(shear)
 
 
 # --------------------------------------------------------------------------------------
@@ -189,7 +189,7 @@ def shear_stress(
     slip: ArrayLike,
     wheel: RigidWheel,
     snow: AbstractTerrain,
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     *,
     distribution: AbstractStressDistribution | None = None,
 ) -> Array:
@@ -213,6 +213,7 @@ def shear_stress(
     `snow` (any terrain), `shear` (model name); keyword `distribution` (None: the front
     region).
     """
+    shear = _shear_name(shear)
     from .inputs import _check_model
 
     _check_model(wheel, snow, distribution, shear)
@@ -619,7 +620,7 @@ def contact_forces(
     snow: AbstractTerrain,
     entry_angle: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     nodes_per_panel: int | None = None,
     *,
     distribution: AbstractStressDistribution | None = None,
@@ -638,14 +639,16 @@ def contact_forces(
       `LayeredSnow`), SI.
     - `entry_angle`: theta0 [rad], 0 < theta0 <= arccos(1 - 2 depth / D).
     - `slip`: driving slip i [-], eq. (2.6); negative when braking.
-    - `shear`: `"classic"` (4.11), `"simplified"` (4.13; WongSnow without a
-      distribution only) or `"none"`.
+    - `shear`: the shear law, `JanosiHanamoto()` / `"classic"` (4.11),
+      `ThesisSimplified()` / `"simplified"` (4.13; WongSnow on the front region only) or
+      `NoShear()` / `"none"`.
     - `nodes_per_panel`: Gauss–Legendre nodes per panel (defaults as in `solve_wheel`).
     - `distribution`: `FrontRegion()` or None (front region), `WongReece`, or any
       `AbstractStressDistribution`.
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
+    shear = _shear_name(shear)
     from .inputs import _check_model, _is_thesis_path
 
     _check_model(wheel, snow, distribution, shear)

@@ -60,6 +60,7 @@ from .inputs import (
 )
 from .lateral import Lateral
 from .root import _implicit_root, _root_outputs
+from .shear_law import AbstractShearLaw, _shear_name
 from .status import Status, _throw_on_failure
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
@@ -599,7 +600,7 @@ def solve_wheel(
     terrain: Terrain,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
-    shear: ShearModel = "classic",
+    shear: ShearModel | AbstractShearLaw = "classic",
     *,
     distribution: AbstractStressDistribution | None = None,
     slip_angle: Float[ArrayLike, "..."] | None = None,
@@ -638,8 +639,9 @@ def solve_wheel(
       place).  Negative slip is braking: the shear displacement, and with it the shear
       stress, thrust and torque, change sign (the Janosi–Hanamoto factor is mirrored,
       `-(1 - exp(-|j|/K))`), so a braked wheel gets a negative thrust.
-    - `shear`: `"classic"` (Janosi–Hanamoto, 4.11), `"simplified"` (the thesis's model,
-      4.13; `WongSnow` without a distribution only) or `"none"` (normal stress only).
+    - `shear`: the shear law, a module or its name: `JanosiHanamoto()` / `"classic"`
+      (4.11), `ThesisSimplified()` / `"simplified"` (the thesis's model, 4.13; `WongSnow`
+      on the front region only) or `NoShear()` / `"none"` (normal stress only).
     - `distribution`: `FrontRegion()` or None (the thesis's front region), `WongReece(c1,
       c2, c3)`, or any `AbstractStressDistribution`.
     - `slip_angle`: beta [rad], |beta| < pi/2, broadcasts like `slip`: the angle between
@@ -705,6 +707,7 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
+    shear = _shear_name(shear)
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
     _check_model(wheel, terrain, distribution, shear)

@@ -18,6 +18,7 @@ from .._terrain.wong import WongSnow
 from .contact import _check_shear
 from .distribution import AbstractStressDistribution, FrontRegion
 from .geometry import RigidWheel
+from .shear_law import _shear_law
 
 # ---------------------------------------------------------------------------------------
 # Input validation
@@ -279,12 +280,7 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
-    if shear == "simplified" and not (_is_front(distribution) and isinstance(terrain, WongSnow)):
-        raise ValueError(
-            "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
-            "of the contact: it needs a WongSnow terrain and distribution=None; use "
-            "shear='classic' for other terrains and for the Wong–Reece distribution."
-        )
+    _shear_law(shear).check(terrain, distribution)
 
 
 def _is_front(distribution) -> bool:
