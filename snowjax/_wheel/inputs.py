@@ -280,7 +280,8 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
-    _shear_law(shear).check(terrain, distribution)
+    law = _shear_law(shear)
+    type(law).check(law, terrain, distribution)  # unbound: an equinox bound method is slow
 
 
 def _is_front(distribution) -> bool:
