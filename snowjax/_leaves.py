@@ -56,9 +56,8 @@ class ParameterInfo:
     - `scale`: typical magnitude, in `unit`; the step of a linearly fitted parameter
       whose start value is 0.
 
-    The eager input checks, `fit_wheel`, `sweep` (and its command line) and the
-    documentation read these, so a terrain law defined outside snowjax needs no table
-    anywhere else.
+    The input checks, `fit_wheel` and the `snowjax sweep` help read these, so a terrain
+    law defined outside snowjax needs no table anywhere else.
     """
 
     unit: str

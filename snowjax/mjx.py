@@ -59,10 +59,10 @@ iterations because with one the contact solve is too inexact for it (measured: f
 rest the chassis jumps by 0.3 m), so differentiate it in forward mode. Measured against
 central differences: the distance after 40 steps from rest with `load="contact"`, 2e-6
 (d/dp_w) and 4e-5 (d/dtan phi) relative; from 1 m/s with `load="contact"`, 2e-7 and
-1e-6. (The derivative of the implicit spin update is a second derivative of the
-equilibrium; until the quadrature rule moved with the entry angle it lacked a Leibniz
-term, and d/dp_w from 1 m/s was 0.6 % off.) With the static loads 3e-4 (measured before
-that fix). Reverse mode at `iterations = 1`: 1e-3.
+1e-6; with the static loads (the default), 3e-8 and 5e-6 from rest, 3e-7 and 8e-7 from
+1 m/s. (The derivative of the implicit spin update is a second derivative of the
+equilibrium: its Leibniz term comes from the quadrature rule that moves with the entry
+angle, `moving_rule`.) Reverse mode at `iterations = 1`: 1e-3.
 
 **Load transfer, measured.**  With `load="contact"` the shipped vehicle driven by 540 N m
 per wheel from 1 m/s carries, after 0.2 s, 2,995 N on each front and 4,004 N on each rear

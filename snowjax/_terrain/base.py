@@ -115,7 +115,7 @@ class AbstractTerrain(eqx.Module):
         """A valid parameter set of this kind (stands in for invalid batch elements)."""
 
 
-# The name of the base class before it was marked abstract (still public).
+# `snowjax.Terrain`: the same class under its shorter public name.
 Terrain = AbstractTerrain
 
 # Field metadata of the shear strength every law has (`eqx.field(..., metadata=COHESION)`).

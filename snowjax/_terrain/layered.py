@@ -64,8 +64,8 @@ class LayeredSnow(AbstractTerrain):
 
     label: ClassVar[str] = "snow"
 
-    # An explicit constructor: type checkers read the AbstractVar shear-strength fields
-    # that the properties below implement as constructor arguments (equinox issue 1123).
+    # An explicit constructor: type checkers read the AbstractVar shear-strength fields,
+    # which the properties below implement, as constructor arguments of the dataclass.
     def __init__(self, top: WongSnow, bottom: WongSnow, ice_failure_pressure):
         self.top = top
         self.bottom = bottom

@@ -213,9 +213,9 @@ def shear_stress(
     `snow` (any terrain), `shear` (model name); keyword `distribution` (None: the front
     region).
     """
-    shear = _shear_name(shear)
     from .inputs import _check_model
 
+    shear = _shear_name(shear)
     _check_model(wheel, snow, distribution, shear)
     distribution = _as_distribution(distribution)
     if isinstance(snow, WongSnow) and isinstance(distribution, FrontRegion):

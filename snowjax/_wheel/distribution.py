@@ -28,9 +28,11 @@ class AbstractStressDistribution(eqx.Module):
     the contact ends under the axle), `breakpoints` (angles where the stress has a kink,
     default none), `rear_angles` (the other angles whose stress angle is a given one:
     where a kink of the terrain's law shows up a second time; default none),
-    `constraints` and `reference`.  Angles in rad, measured from the vertical through
-    the wheel centre, theta0 the entry angle, slip the driving slip i [-] (2.6).  The
-    shear stress follows the rim's shear displacement (4.10) over the whole contact.
+    `constraints` and `reference` (a valid instance, which stands in for invalid batch
+    elements; the default `cls()` serves only a distribution without fields).  Angles
+    in rad, measured from the vertical through the wheel centre, theta0 the entry angle,
+    slip the driving slip i [-] (2.6).  The shear stress follows the rim's shear
+    displacement (4.10) over the whole contact.
     Parameters are array leaves (`eqx.field(converter=..., metadata=parameter(...))`):
     they broadcast, vmap, differentiate and can be fitted like terrain parameters.
     """
