@@ -273,8 +273,8 @@ def simulate_planar(
       time.  An equilibrium not converged within the limit shows as
       `Status.NOT_CONVERGED` in `status`; raise the limit then.
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` or another `AbstractStressDistribution`
-      (c1, c2, c3 [-]; scalar leaves).
+      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
+      (scalar leaves).
 
     **Returns:** `PlanarTrajectory` with `1 + round(t1 / dt) // save_every` rows.
 

@@ -341,8 +341,8 @@ def simulate_longitudinal(
     - `newton_steps`: iteration limit of each implicit step's Newton solve; a step not
       solved within it is retried as smaller steps.
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` or another `AbstractStressDistribution`
-      (c1, c2, c3 [-]; scalar leaves), passed to `solve_wheel`.
+      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
+      (scalar leaves), passed to `solve_wheel`.
 
     **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.
 

@@ -316,8 +316,8 @@ def wheel_forces(
       `entry_angle` of the previous simulator step; changes only the iteration count.
     - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` or another `AbstractStressDistribution`
-      (c1, c2, c3 [-]), passed to `solve_wheel`.
+      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`,
+      passed to `solve_wheel`.
 
     **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage
     [m], entry angle [rad], slip [-], status).

@@ -384,8 +384,8 @@ def sweep(
     - `shear`: a shear law or its name, `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
       `"simplified"` needs a `WongSnow` and no distribution).
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` or another `AbstractStressDistribution`
-      (c1, c2, c3 [-]; scalar or 1-D leaves, or a list of them), as in `solve_wheel`.
+      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
+      (scalar or 1-D leaves, or a list of them), as in `solve_wheel`.
       The terrain's and the distribution's types and leaf names are part of the sweep
       definition: a sweep of another terrain or distribution in `out` is refused.
     - `out`: directory for `manifest.json`, the chunks and the outputs.
