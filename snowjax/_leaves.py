@@ -125,11 +125,12 @@ def _parameter_infos(obj, prefix: str = "") -> dict[str, ParameterInfo]:
     return out
 
 
-def _parameter_rules(obj) -> list[tuple[str, Any, Any, str]]:
+def _parameter_rules(obj, infos=None) -> list[tuple[str, Any, Any, str]]:
     """(field path, value, ok mask, allowed range) of every parameter field of `obj`
-    (nested modules included) from its `ParameterInfo`; `None` values are skipped."""
+    (nested modules included) from its `ParameterInfo` (or from `infos`, path ->
+    `ParameterInfo`); `None` values are skipped."""
     rules = []
-    for path, info in _parameter_infos(obj).items():
+    for path, info in (_parameter_infos(obj) if infos is None else infos).items():
         value = _get_path(obj, path)
         if value is not None:
             rules.append((path, value, info.ok(value), info.allowed()))

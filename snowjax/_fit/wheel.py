@@ -31,7 +31,7 @@ from .._leaves import (
     _parameter_names,
     _with_leaves,
 )
-from .._terrain.base import _STRENGTH, Terrain
+from .._terrain.base import Terrain, _terrain_parameter_infos
 from .._terrain.wong import WongSnow
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
@@ -185,20 +185,16 @@ def _resolve_fit_names(fit, terrain, distribution, lateral=None):
 
 
 def _infos(objects) -> dict[tuple[str, str], ParameterInfo]:
-    """(owner, field path) -> `ParameterInfo` of every declared parameter of the objects;
-    a terrain's shear-strength fields declared without one get the standard one."""
-    infos = {
+    """(owner, field path) -> `ParameterInfo` of every declared parameter of the objects
+    (a terrain's plain shear-strength fields get the standard one)."""
+    return {
         (owner, path): info
         for owner, obj in objects.items()
         if obj is not None
-        for path, info in _parameter_infos(obj).items()
+        for path, info in (
+            _terrain_parameter_infos(obj) if owner == "terrain" else _parameter_infos(obj)
+        ).items()
     }
-    terrain = objects.get("terrain")
-    if terrain is not None:
-        for name, info in _STRENGTH.items():
-            if name in _module_leaves(terrain):
-                infos.setdefault(("terrain", name), info)
-    return infos
 
 
 def _transform(targets, theta0, infos) -> Transform:

@@ -12,8 +12,10 @@ from equinox import AbstractVar
 from jaxtyping import Array, ArrayLike, Float
 
 from .._leaves import (
+    ParameterInfo,
     _check_real_leaves,
     _own_parameter_fields,
+    _parameter_infos,
     _parameter_rules,
     parameter,
 )
@@ -97,13 +99,7 @@ class AbstractTerrain(eqx.Module):
         parameter sets included; shear-strength fields declared without one (plain
         `eqx.field`) get the standard rules (c >= 0, tan phi >= 0, K > 0).
         """
-        rules = _parameter_rules(self)
-        for name, info in _own_parameter_fields(type(self)):
-            if info is None and name in _STRENGTH:
-                value = getattr(self, name)
-                default = _STRENGTH[name]
-                rules.append((name, value, default.ok(value), default.allowed()))
-        return rules
+        return _parameter_rules(self, _terrain_parameter_infos(self))
 
     def wheel_constraints(self, width) -> list[tuple[str, Array, Array, str]]:
         """Rules that involve the wheel width b [m] (e.g. a positive Bekker modulus)."""
@@ -133,3 +129,13 @@ _STRENGTH = {
     "tan_phi": TAN_PHI["parameter"],
     "shear_modulus": SHEAR_MODULUS["parameter"],
 }
+
+
+def _terrain_parameter_infos(terrain) -> dict[str, ParameterInfo]:
+    """`ParameterInfo` of every parameter of a terrain by field path; shear-strength
+    fields declared without one (plain `eqx.field`) get the standard one."""
+    infos = _parameter_infos(terrain)
+    for name, info in _own_parameter_fields(type(terrain)):
+        if info is None and name in _STRENGTH:
+            infos[name] = _STRENGTH[name]
+    return infos

@@ -46,13 +46,11 @@ from jaxtyping import Array, ArrayLike, Float
 from .._leaves import _is_traced
 from .._terrain.base import AbstractTerrain
 from .._terrain.shear import _signed_mobilisation
-from .._terrain.wong import WongSnow
-from .distribution import AbstractStressDistribution, FrontRegion, _as_distribution
+from .distribution import AbstractStressDistribution, _as_distribution, _is_thesis_path
 from .general import _general_nodes_for, _rim_sinkage_between, _rule, general_contact
 from .geometry import RigidWheel, _sincos_half
 from .shear_law import AbstractShearLaw, ShearModel, _shear_name
 
-SHEAR_MODELS = ("classic", "simplified", "none")
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
 # four-panel rule otherwise: one count per panel, axle to entry), chosen so that every
 # contact integral stays within 1e-7 of adaptive quadrature over the documented range
@@ -74,11 +72,6 @@ def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, tuple[int,
     if n < 2:
         raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
     return n, (n, n, n, n)
-
-
-def _check_shear(shear) -> None:
-    """`ValueError` unless `shear` is a shear-law module or its name."""
-    _shear_name(shear)
 
 
 # --------------------------------------------------------------------------------------
@@ -155,7 +148,7 @@ def normal_stress(
     **Returns:** sigma [Pa]; `+inf` only at theta = 0 of a wheel resting on a Wong base.
     """
     distribution = _as_distribution(distribution)
-    if isinstance(snow, WongSnow) and isinstance(distribution, FrontRegion):
+    if _is_thesis_path(snow, distribution):
         z0_rel = _relative_sinkage_at_axle(entry_angle, wheel.diameter, snow.z_w)
         big_z = z0_rel + wheel.diameter / snow.z_w * jnp.sin(jnp.asarray(theta) / 2) ** 2
         return -snow.p_w * jnp.log(big_z)
@@ -218,7 +211,7 @@ def shear_stress(
     shear = _shear_name(shear)
     _check_model(wheel, snow, distribution, shear)
     distribution = _as_distribution(distribution)
-    if isinstance(snow, WongSnow) and isinstance(distribution, FrontRegion):
+    if _is_thesis_path(snow, distribution):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
         return _shear_from_sigma(sigma, theta, entry_angle, slip, wheel.diameter, snow, shear)
     sigma, c, tan_phi, k = _rim_stress_properties(
@@ -649,7 +642,7 @@ def contact_forces(
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
     shear = _shear_name(shear)
-    from .inputs import _check_model, _is_thesis_path
+    from .inputs import _check_model
 
     _check_model(wheel, snow, distribution, shear)
     distribution = _as_distribution(distribution)

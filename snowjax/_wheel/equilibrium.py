@@ -43,7 +43,7 @@ from .contact import (
     _with_rule_for,
     max_sinkage,
 )
-from .distribution import AbstractStressDistribution, _as_distribution
+from .distribution import AbstractStressDistribution, _as_distribution, _is_thesis_path
 from .general import _general_nodes_for, general_contact
 from .geometry import RigidWheel
 from .inputs import (
@@ -52,7 +52,6 @@ from .inputs import (
     _check_options,
     _check_rules,
     _fits,
-    _is_thesis_path,
     _magnitude_window,
     _numeric_argument,
     _valid_mask,

@@ -14,9 +14,7 @@ import numpy as np
 
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
-from .._terrain.wong import WongSnow
-from .contact import _check_shear
-from .distribution import AbstractStressDistribution, FrontRegion
+from .distribution import AbstractStressDistribution, _is_front
 from .geometry import RigidWheel
 from .shear_law import _shear_law
 
@@ -267,7 +265,7 @@ def _valid_mask(wheel, terrain, distribution, load, slip, shear):
 
 def _check_model(wheel, terrain, distribution, shear) -> None:
     """Type checks and the refused terrain / distribution / shear combinations."""
-    _check_shear(shear)
+    law = _shear_law(shear)  # ValueError for an unknown shear law, before the type checks
     if not isinstance(wheel, RigidWheel):
         raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
     if not isinstance(terrain, Terrain):
@@ -280,15 +278,4 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
-    law = _shear_law(shear)
     type(law).check(law, terrain, distribution)  # unbound: an equinox bound method is slow
-
-
-def _is_front(distribution) -> bool:
-    """Whether the distribution is the thesis's front region (`None` or `FrontRegion()`)."""
-    return distribution is None or isinstance(distribution, FrontRegion)
-
-
-def _is_thesis_path(terrain, distribution) -> bool:
-    """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
-    return _is_front(distribution) and isinstance(terrain, WongSnow)

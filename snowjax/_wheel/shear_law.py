@@ -17,6 +17,7 @@ from typing import ClassVar, Literal, cast
 import equinox as eqx
 
 from .._terrain.wong import WongSnow
+from .distribution import _is_front
 
 __all__ = ["AbstractShearLaw", "JanosiHanamoto", "ThesisSimplified", "NoShear"]
 
@@ -55,10 +56,7 @@ class ThesisSimplified(AbstractShearLaw):
 
     def check(self, terrain, distribution) -> None:
         """`ValueError` unless the terrain is `WongSnow` on the front region."""
-        from .distribution import FrontRegion
-
-        front = distribution is None or isinstance(distribution, FrontRegion)
-        if not (front and isinstance(terrain, WongSnow)):
+        if not (_is_front(distribution) and isinstance(terrain, WongSnow)):
             raise ValueError(
                 "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
                 "of the contact: it needs a WongSnow terrain and distribution=None; use "
