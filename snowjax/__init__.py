@@ -37,10 +37,10 @@ from ._terrain.wong import wong_sinkage as wong_sinkage
 # --- wheel (chapter 4) ---
 from ._wheel.contact import ContactForces as ContactForces
 from ._wheel.contact import contact_forces as contact_forces
-from ._wheel.contact import max_sinkage as max_sinkage
+from ._wheel.geometry import max_sinkage as max_sinkage
 from ._wheel.contact import normal_stress as normal_stress
-from ._wheel.contact import rim_sinkage as rim_sinkage
-from ._wheel.contact import shear_displacement as shear_displacement
+from ._wheel.geometry import rim_sinkage as rim_sinkage
+from ._wheel.geometry import shear_displacement as shear_displacement
 from ._wheel.contact import shear_stress as shear_stress
 from ._wheel.equilibrium import Status as Status
 from ._wheel.equilibrium import WheelState as WheelState

@@ -47,8 +47,24 @@ from .._leaves import _is_traced
 from .._terrain.base import AbstractTerrain
 from .._terrain.shear import _signed_mobilisation
 from .distribution import AbstractStressDistribution, _as_distribution, _is_thesis_path
-from .general import _general_nodes_for, _rim_sinkage_between, _rule, general_contact
-from .geometry import RigidWheel, _sincos_half
+from .general import (
+    DEFAULT_GENERAL_NODES,
+    _layer_width,
+    _power_map,
+    _rule,
+    _shear_sign_change,
+    _sinh_offsets,
+    general_contact,
+)
+from .geometry import (
+    RigidWheel,
+    _rim_sinkage_between,
+    _shear_displacement,
+    _shear_displacement_slope,
+    _sincos_half,
+    max_sinkage,
+    shear_displacement,
+)
 from .shear_law import AbstractShearLaw, ShearModel, _shear_name
 
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
@@ -64,59 +80,23 @@ DEFAULT_NODES_PER_PANEL = {
 }
 
 
-def _nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, tuple[int, ...]]:
-    """(nodes per panel of the two-panel rule, nodes of each panel of the four-panel rule)."""
+def _nodes_for(shear: str, nodes_per_panel: int | None, thesis: bool) -> tuple:
+    """Nodes of the rule (without braking, with braking), indexed by `braking`.
+
+    `thesis` (Wong snow's rule): nodes per panel of the two-panel rule, and of each panel
+    of the four-panel rule; otherwise nodes per half-panel of the any-terrain rule.
+    """
     if nodes_per_panel is None:
-        return DEFAULT_NODES_PER_PANEL[shear]
+        return DEFAULT_NODES_PER_PANEL[shear] if thesis else DEFAULT_GENERAL_NODES[shear]
     n = int(nodes_per_panel)
     if n < 2:
         raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
-    return n, (n, n, n, n)
+    return (n, (n, n, n, n)) if thesis else (n, n)
 
 
 # --------------------------------------------------------------------------------------
 # Geometry and stresses (pure functions of scalars or broadcastable arrays)
 # --------------------------------------------------------------------------------------
-
-
-def rim_sinkage(theta: ArrayLike, entry_angle: ArrayLike, diameter: ArrayLike) -> Array:
-    """Sinkage of the rim point at angle theta, eq. (4.5): `z = D/2 (cos theta - cos theta0)`.
-
-    Written as `D [sin^2(theta0/2) - sin^2(theta/2)]` to avoid cancellation.
-
-    **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `diameter` D [m].
-    **Returns:** z [m].
-    """
-    return jnp.asarray(diameter) * (
-        jnp.sin(jnp.asarray(entry_angle) / 2) ** 2 - jnp.sin(jnp.asarray(theta) / 2) ** 2
-    )
-
-
-def max_sinkage(entry_angle: ArrayLike, diameter: ArrayLike) -> Array:
-    """Maximum sinkage under the axle, eq. (4.6) / (4.15): `z0 = D/2 (1 - cos theta0)`.
-
-    **Arguments:** `entry_angle` theta0 [rad], `diameter` D [m].  **Returns:** z0 [m].
-    """
-    return jnp.asarray(diameter) * jnp.sin(jnp.asarray(entry_angle) / 2) ** 2
-
-
-def shear_displacement(
-    theta: ArrayLike, entry_angle: ArrayLike, slip: ArrayLike, diameter: ArrayLike
-) -> Array:
-    """Shear displacement along the rim, eq. (4.10).
-
-    `j = D/2 [(theta0 - theta) - (1 - i)(sin theta0 - sin theta)]`.
-
-    **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `slip` i [-] (driving slip,
-    eq. 2.6; negative when braking), `diameter` D [m].  **Returns:** j [m].
-    """
-    theta0 = jnp.asarray(entry_angle)
-    theta = jnp.asarray(theta)
-    return (
-        jnp.asarray(diameter)
-        / 2
-        * ((theta0 - theta) - (1 - jnp.asarray(slip)) * (jnp.sin(theta0) - jnp.sin(theta)))
-    )
 
 
 def _relative_sinkage_at_axle(entry_angle, diameter, z_w):
@@ -278,20 +258,10 @@ def _sigma_sin_integral(z0_rel, a, p_w):
 
 
 def _sinh_panel(t, w, lo, hi, scale, toward_hi):
-    """Map GL nodes t in [0, 1] onto [lo, hi], clustered at one end with the given scale.
-
-    `x = end -+ s sinh(mu t)` with `mu = asinh((hi - lo) / s)`: node spacing ~ s at the
-    clustered end, growing geometrically away from it.  sinh and cosh come from one exp.
-    """
-    length = hi - lo
-    s = jnp.clip(scale, 1e-4 * length, 10 * length)
-    mu = jnp.arcsinh(length / s)
-    e = jnp.exp(mu * t)
-    inv = 1 / e
-    offset = s * 0.5 * (e - inv)
-    jac = s * mu * 0.5 * (e + inv) * w
-    x = jnp.where(toward_hi, hi - offset, lo + offset)
-    return x, jac
+    """GL nodes t in [0, 1] with weights w mapped onto [lo, hi] by the sinh map
+    (`_sinh_offsets`), clustered at hi (`toward_hi`) or lo with the given scale."""
+    offset, jac = _sinh_offsets(t, w, hi - lo, scale, 1e-4)
+    return jnp.where(toward_hi, hi - offset, lo + offset), jac
 
 
 def _axle_gap(dtype) -> float:
@@ -319,27 +289,9 @@ def _classic_layout(theta0, slip, diameter, snow, entry_scale):
 
     Returns (b1, split, b3, scale2, scale3, scale4).
     """
-    r = diameter / 2
-    # j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta), k = 1 - i.
-    k = 1 - slip
-    sin_theta0 = jnp.sin(theta0)
-    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
-    has_root = (slip < 0) & (theta0 - k * sin_theta0 < 0) & (theta_star < theta0)
-
-    def f_and_slope(th):  # 0 <= th <= theta0 < pi / 2: the Taylor sine and cosine
-        half_sin, half_cos = _sincos_half(th)
-        sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
-        return (theta0 - th) - k * (sin_theta0 - sin), -1 + k * cos
-
-    # f is concave and increasing on [0, theta_star]: Newton from 0 converges
-    # monotonically from the left.
-    def newton(_, th):
-        f, slope = f_and_slope(th)
-        return jnp.minimum(th - f / jnp.maximum(slope, 1e-12), theta_star)
-
-    th = jax.lax.fori_loop(0, 8, newton, jnp.zeros_like(theta0))
-    slope = jnp.abs(f_and_slope(th)[1])
-    split_scale = snow.shear_modulus / (r * jnp.maximum(slope, 1e-12))
+    th, has_root, theta_star = _shear_sign_change(theta0, jnp.zeros_like(theta0), slip, 8)
+    slope = _shear_displacement_slope(1 - 2 * _sincos_half(th)[0] ** 2, slip)
+    split_scale = _layer_width(snow.shear_modulus, diameter / 2, slope)
     has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
     split = jnp.where(has_root, th, theta0 / 2)
     gap = theta0 - split
@@ -432,10 +384,9 @@ def _entry_scale(theta0, slip, diameter, snow, shear, a):
     """Width [rad] of the layer behind the entry angle over which the shear mobilises."""
     if shear == "none":
         return jnp.full_like(theta0, jnp.inf)
-    r = diameter / 2
-    entry_slope = jnp.abs(1 - (1 - slip) * jnp.cos(theta0))
     # Linear rise of j / K (classic) or of U0's linear term (simplified, identical).
-    scale = snow.shear_modulus / (r * jnp.maximum(entry_slope, 1e-12))
+    slope = _shear_displacement_slope(jnp.cos(theta0), slip)
+    scale = _layer_width(snow.shear_modulus, diameter / 2, slope)
     if shear == "simplified":
         # U0's cubic term: sigma_bar ~ k1 (theta0 - theta) near the entry, so
         # |2i - i^2| tau1 (k1 d)^3 / 6 = 1 at d = 1 / (k1 cbrt(|2i - i^2| tau1 / 6)).
@@ -464,11 +415,9 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
     if not braking:
         t, w = _rule(n, theta0.dtype)
         half = theta0 / 2
+        u, du = _power_map(t, w, 2)
         x2, w2 = _sinh_panel(t, w, half, theta0, entry_scale, True)
-        return (
-            jnp.concatenate([half * t**2, x2]),
-            jnp.concatenate([half * 2 * t * w, w2]),
-        )
+        return jnp.concatenate([half * u, x2]), jnp.concatenate([half * du, w2])
     if shear == "simplified":
         b1, split, b3, scale2, scale3, scale4 = _simplified_layout(
             theta0, slip, diameter, snow, z0_rel, a, entry_scale
@@ -485,13 +434,11 @@ def _nodes(theta0, slip, diameter, snow, shear, z0_rel, a, n, braking=True):
     # entry angle.  (One call per panel: a stacked (3, n) map costs XLA:CPU twice as
     # much under vmap.)
     (t1, w1), *rules = [_rule(m, theta0.dtype) for m in n]
+    u1, du1 = _power_map(t1, w1, 2)
     x2, j2 = _sinh_panel(*rules[0], b1, split, scale2, True)
     x3, j3 = _sinh_panel(*rules[1], split, b3, scale3, False)
     x4, j4 = _sinh_panel(*rules[2], b3, theta0, scale4, True)
-    return (
-        jnp.concatenate([b1 * t1**2, x2, x3, x4]),
-        jnp.concatenate([b1 * 2 * t1 * w1, j2, j3, j4]),
-    )
+    return jnp.concatenate([b1 * u1, x2, x3, x4]), jnp.concatenate([b1 * du1, j2, j3, j4])
 
 
 # --------------------------------------------------------------------------------------
@@ -577,7 +524,7 @@ def _contact_scalar(
     if shear == "none":
         tau = jnp.zeros_like(sigma)
     elif shear == "classic":
-        j = r * ((theta0 - theta) - (1 - slip) * (jnp.sin(theta0) - sin))
+        j = _shear_displacement(theta, theta0, slip, r, sin)
         tau = (snow.cohesion + sigma * snow.tan_phi) * _signed_mobilisation(j / snow.shear_modulus)
     else:
         tau = (snow.cohesion + sigma * snow.tan_phi) * _mobilisation(
@@ -646,13 +593,67 @@ def contact_forces(
 
     _check_model(wheel, snow, distribution, shear)
     distribution = _as_distribution(distribution)
-    if _is_thesis_path(snow, distribution):
-        n = _nodes_for(shear, nodes_per_panel)
-        return _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, _layout(slip))
-    n = _general_nodes_for(shear, nodes_per_panel)
-    return _general_contact_forces_jit(
-        wheel, snow, distribution, entry_angle, slip, shear, n, _layout(slip)
+    thesis = _is_thesis_path(snow, distribution)
+    n = _nodes_for(shear, nodes_per_panel, thesis)
+    return _contact_forces_jit(
+        wheel, snow, distribution, entry_angle, slip, shear, n, _layout(slip), thesis
     )
+
+
+def _contact_batch(
+    theta0,
+    slip,
+    wheel,
+    terrain,
+    distribution,
+    side,
+    *,
+    shear,
+    n,
+    braking,
+    thesis,
+    bulldozing=False,
+    vertical_only=False,
+    bottomed=None,
+    moving_rule=False,
+):
+    """Contact integrals of a flat batch (1-D leaves): W alone with `vertical_only`, else
+    (W, R, T, M, F_y, M_z) (F_y = M_z = 0 without a slip angle, `side` None).
+
+    The one entry to the quadrature, for the solver and `contact_forces`.  `thesis`
+    (`WongSnow` on the front region, straight running) takes Wong snow's accelerated rule
+    (`_contact_scalar`: graded panels placed by the shear law, the log singularity at a
+    bottomed axle subtracted in closed form); every other combination the any-terrain
+    rule (`general_contact`: panels cut at the distribution's angles, the terrain's
+    breakpoints and the shear law's sign change).  `bottomed` and `moving_rule` concern
+    only the former (the latter's nodes move with theta0 by construction).
+    """
+
+    def one(th, i, wh, tr, ds, sd, bt):
+        if thesis:
+            out = _contact_scalar(
+                th, i, wh.diameter, wh.width, tr, shear, n, bt, braking, vertical_only, moving_rule
+            )
+        else:
+            out = general_contact(
+                th,
+                i,
+                wh.diameter,
+                wh.width,
+                tr,
+                ds,
+                shear,
+                n,
+                braking,
+                vertical_only,
+                sd,
+                bulldozing,
+            )
+        if vertical_only or sd is not None:
+            return out
+        return (*out, jnp.zeros_like(th), jnp.zeros_like(th))
+
+    return jax.vmap(one)(theta0, slip, wheel, terrain, distribution, side, bottomed)
 
 
 def _layout(slip, warm_start: bool = False) -> str:
@@ -695,39 +696,26 @@ def _broadcast_leaves(*trees):
 
 
 @eqx.filter_jit
-def _contact_forces_jit(wheel, snow, entry_angle, slip, shear, n, layout):
-    shape, _, (wheel, snow, theta0, slip) = _broadcast_leaves(wheel, snow, entry_angle, slip)
-
-    def forces(braking):
-        fn = lambda th, i, wh, sn: _contact_scalar(  # noqa: E731
-            th, i, wh.diameter, wh.width, sn, shear, n[braking], braking=braking
-        )
-        return jax.vmap(fn)(theta0, slip, wheel, snow)
-
-    w, r, t, m = _with_rule_for(slip, shear, forces, layout)
-    reshape = lambda x: x.reshape(shape)  # noqa: E731
-    return ContactForces(
-        vertical_load=reshape(w),
-        motion_resistance=reshape(r),
-        thrust=reshape(t),
-        drawbar_pull=reshape(t - r),
-        torque=reshape(m),
-    )
-
-
-@eqx.filter_jit
-def _general_contact_forces_jit(wheel, terrain, distribution, entry_angle, slip, shear, n, layout):
+def _contact_forces_jit(wheel, terrain, distribution, entry_angle, slip, shear, n, layout, thesis):
     shape, _, (wheel, terrain, distribution, theta0, slip) = _broadcast_leaves(
         wheel, terrain, distribution, entry_angle, slip
     )
 
     def forces(braking):
-        fn = lambda th, i, d, b, tr, ds: general_contact(  # noqa: E731
-            th, i, d, b, tr, ds, shear, n[braking], braking
+        return _contact_batch(
+            theta0,
+            slip,
+            wheel,
+            terrain,
+            distribution,
+            None,
+            shear=shear,
+            n=n[braking],
+            braking=braking,
+            thesis=thesis,
         )
-        return jax.vmap(fn)(theta0, slip, wheel.diameter, wheel.width, terrain, distribution)
 
-    w, r, t, m = cast(tuple, _with_rule_for(slip, shear, forces, layout))
+    w, r, t, m, _, _ = cast(tuple, _with_rule_for(slip, shear, forces, layout))
     reshape = lambda x: x.reshape(shape)  # noqa: E731
     return ContactForces(
         vertical_load=reshape(w),

@@ -63,6 +63,7 @@ import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._leaves import _as_float
+from .geometry import _shear_displacement
 
 __all__ = [
     "DimensionlessConstants",
@@ -189,8 +190,7 @@ def _one_minus_exp_jvp(primals, tangents):
 
 def _normalized_displacement(theta, slip, k):
     """J = j / D = ½[(θ0 - θ) - (1 - i)(sin θ0 - sin θ)], eq. (4.10) / D."""
-    theta0 = k.entry_angle
-    return 0.5 * ((theta0 - theta) - (1 - slip) * (jnp.sin(theta0) - jnp.sin(theta)))
+    return _shear_displacement(theta, k.entry_angle, slip, 0.5)
 
 
 def classic_normalized_shear(

@@ -21,6 +21,7 @@ parameters; `jax.grad` transposes the latter).
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import cast
 
@@ -36,16 +37,14 @@ from .bracketed import solve_elementwise
 from .contact import (
     ShearModel,
     _broadcast_leaves,
-    _contact_scalar,
+    _contact_batch,
     _layout,
     _nodes_for,
     _sigma_cos_integral,
     _with_rule_for,
-    max_sinkage,
 )
 from .distribution import AbstractStressDistribution, _as_distribution, _is_thesis_path
-from .general import _general_nodes_for, general_contact
-from .geometry import RigidWheel
+from .geometry import RigidWheel, max_sinkage
 from .inputs import (
     _broadcast_shape,
     _check_model,
@@ -146,12 +145,20 @@ def _newton_s(residual, s, steps):
     return jax.lax.fori_loop(0, steps, step, s)
 
 
+def _no_shear_load(theta0, diameter, width, snow):
+    """W without shear stress on Wong snow's front region, in closed form [N]:
+    r b int_0^theta0 sigma cos(theta) dtheta (`_sigma_cos_integral`)."""
+    a = diameter / (2 * snow.z_w)
+    z0_rel = jnp.maximum(1 - max_sinkage(theta0, diameter) / snow.z_w, 0.0)
+    return diameter / 2 * width * _sigma_cos_integral(theta0, z0_rel, a, snow.p_w)
+
+
 def _initial_guess(theta_cap, load, diameter, width, snow):
     """Solver start s0 from the no-shear load balance, using its closed form.
 
     Starting from the small-angle law W ~ r b p_w a theta0^3 / 3, three Newton steps on
-    `ln(r b C(theta0) / F_z)` (C the closed-form int sigma cos) refine the guess; the
-    shear stress adds to W for a driven wheel, so the true theta0 is a little lower.
+    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`) refine the guess; the shear
+    stress adds to W for a driven wheel, so the true theta0 is a little lower.
     """
     a = diameter / (2 * snow.z_w)
     rb = diameter / 2 * width
@@ -160,10 +167,8 @@ def _initial_guess(theta_cap, load, diameter, width, snow):
     s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
 
     def residual(s):
-        th = _theta_from_s(s, theta_cap)
-        z0_rel = jnp.maximum(1 - max_sinkage(th, diameter) / snow.z_w, 0.0)
-        w = rb * _sigma_cos_integral(th, z0_rel, a, snow.p_w)
-        return jnp.log(jnp.maximum(w, 1e-30 * load) / load)
+        w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, snow)
+        return _balance_residual(w, load)
 
     return jax.lax.stop_gradient(_newton_s(residual, jnp.maximum(s, s_min), 3))
 
@@ -195,132 +200,198 @@ def _entry_angle_cap(depth, diameter):
     return jnp.minimum(theta_base, MAX_ENTRY_ANGLE), theta_base <= MAX_ENTRY_ANGLE
 
 
-def _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking):
-    """Solve a flat batch (every leaf of shape (B,)) with one quadrature layout.
+# ---------------------------------------------------------------------------------------
+# Where Newton starts: the bracket, the target and the first iterate
+# ---------------------------------------------------------------------------------------
 
-    The batch is one `optx.root_find` (`BracketedNewton`) with a diagonal Jacobian (the
-    elements are independent), so a Newton step is one tangent evaluation, and the
-    batch-wide capacity check is a `lax.cond` that costs nothing when not needed.
+
+def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shear):
+    """(over, target, lower, upper, s0) from Wong snow's closed-form no-shear load.
+
+    The capacity of the layer is W at s_min.  For slip >= 0 the shear stress only adds to
+    W, so loads below the closed-form no-shear capacity are known to be carried and the
+    quadrature is only needed if some element brakes or is heavier than that (a
+    `lax.cond` that costs nothing when not needed).  The start is the closed-form
+    no-shear balance, corrected once by the shear stress's share of W (one quadrature
+    at the no-shear guess gives W / W_no_shear, and the closed form is re-solved for
+    load / factor: the guess's error falls from ~4 % to ~0.3 %, one Newton step fewer),
+    or the warm start.
     """
-    # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
-    # the solve runs on stopped copies of the inputs.
-    differentiable = (wheel, snow, load, slip)
-    wheel, snow, load, slip = jax.lax.stop_gradient(differentiable)
-    dtype = load.dtype
-    tol = _tolerance(dtype)
     diameter, width = wheel.diameter, wheel.width
-    theta_cap, reaches_base = _entry_angle_cap(snow.z_w, diameter)
-    n_nodes = n[braking]
-
-    def w_batch(theta0, i, d, b, sn) -> Array:  # W of every element, explicit parameters
-        fn = lambda th, i, d, b, sn: _contact_scalar(  # noqa: E731
-            th, i, d, b, sn, shear, n_nodes, None, braking, vertical_only=True
-        )
-        return cast(Array, jax.vmap(fn)(theta0, i, d, b, sn))
-
-    def vertical_load(theta0) -> Array:
-        return w_batch(theta0, slip, diameter, width, snow)
-
-    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M) at s
-        over, bottomed = masks
-        th_cap, i, d, b, sn = params
-        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
-        fn = lambda th, i, d, b, sn, bt: _contact_scalar(  # noqa: E731
-            th, i, d, b, sn, shear, n_nodes, bt, braking, moving_rule=moving_rule
-        )
-        return (theta0, *jax.vmap(fn)(theta0, i, d, b, sn, bottomed))
-
-    # Capacity of the layer, W at s_min.  For slip >= 0 the shear stress only adds to W,
-    # so loads below the closed-form no-shear capacity are known to be carried and the
-    # quadrature is only needed if some element brakes or is heavier than that.
     s_min = jnp.full_like(load, _s_min(load.dtype))
     theta_top = _theta_from_s(s_min, theta_cap)
-    a = diameter / (2 * snow.z_w)
-    z0_top = jnp.maximum(1 - max_sinkage(theta_top, diameter) / snow.z_w, 0.0)
-    no_shear_capacity = diameter / 2 * width * _sigma_cos_integral(theta_top, z0_top, a, snow.p_w)
+    no_shear_capacity = _no_shear_load(theta_top, diameter, width, snow)
     surely_carried = (no_shear_capacity > load * (1 + 1e-6)) & (slip >= 0)
     capacity = jax.lax.cond(
-        jnp.all(surely_carried),
-        lambda: jnp.full_like(load, jnp.inf),
-        lambda: vertical_load(theta_top),
+        jnp.all(surely_carried), lambda: jnp.full_like(load, jnp.inf), lambda: vertical(theta_top)
     )
     over = load >= capacity
     # Elements that cannot be balanced are solved for half their capacity (any solvable
     # target would do) so that the batch's Newton iteration terminates quickly.
     target = jnp.where(over, 0.5 * capacity, load)
+    if guess is not None:
+        s0 = _warm_start(guess, theta_cap)
+    else:
+        s0 = _initial_guess(theta_cap, target, diameter, width, snow)
+        if shear != "none":
+            theta_g = _theta_from_s(s0, theta_cap)
+            w_ns = _no_shear_load(theta_g, diameter, width, snow)
+            factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
+            factor = jax.lax.stop_gradient(factor)
+            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow)
+    return over, target, s_min, jnp.full_like(load, S_MAX), s0
+
+
+def _scan_grid(terrain, dtype):
+    """Solver variable s at which W is scanned before Newton (increasing: deep to shallow).
+
+    s^2 = S_MIN^2, 8 and S_MAX^2 = 16 (theta0 = the cap, e^-8 of it and 1e-7 of it): W is
+    monotone except for a braked wheel's backward shear, so the grid only has to start
+    Newton, by interpolating ln W linearly in s^2 (exact for a power law) inside the
+    interval that brackets the root.  For a law with breakpoints
+    (`AbstractTerrain.breakpoint_sinkages`: `LayeredSnow`, whose W(theta0) can fall after
+    the ice breaks), s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
+    theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
+    peak; a peak narrower than that can be missed (then a deeper root is returned).
+    """
+    if terrain.breakpoint_sinkages():
+        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
+        s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
+    else:
+        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 3)
+    return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
+
+
+def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
+    """(over, target, lower, upper, s0) from a scan of W over entry angles (any terrain).
+
+    Without a warm start, W is evaluated on a grid of entry angles (`_scan_grid`); the
+    shallowest grid interval where W crosses the load brackets the root (for a layered
+    snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
+    and interpolating ln W linearly in s^2 inside it (exact for a power law) gives s0.
+    With a warm start, the bracket is the whole range and the capacity W at s_min.
+    """
+    del slip, wheel, shear
+    dtype = load.dtype
+    s_min = jnp.full_like(load, _s_min(dtype))
+    if guess is not None:
+        w_top = vertical(_theta_from_s(s_min, theta_cap))
+        over = w_top < load
+        target = jnp.where(over, 0.5 * w_top, load)
+        return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
+    s_grid = _scan_grid(terrain, dtype)
+    points = s_grid.shape[0]
+    w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
+        jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
+    )
+    over = ~jnp.any(w_grid >= load, axis=0)
+    target = jnp.where(over, 0.5 * w_grid[0], load)
+    carried = w_grid >= target
+    # The shallowest grid point that carries the target (largest s), kept <= K - 2.
+    k = jnp.clip(points - 1 - jnp.argmax(carried[::-1], axis=0), 0, points - 2)
+    lower, upper = s_grid[k], s_grid[k + 1]
+    w_lo = jnp.take_along_axis(w_grid, k[None], 0)[0]
+    w_hi = jnp.take_along_axis(w_grid, k[None] + 1, 0)[0]
+    f_lo = jnp.log(jnp.maximum(w_lo, 1e-300) / target)
+    f_hi = jnp.log(jnp.maximum(w_hi, 1e-300) / target)
+    frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
+    return over, target, lower, upper, jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
+
+
+# ---------------------------------------------------------------------------------------
+# The solve
+# ---------------------------------------------------------------------------------------
+
+
+def _solve_layout(
+    wheel, terrain, distribution, load, slip, guess, side, *, options, braking, bulldozing
+):
+    """Equilibrium of a flat batch (every leaf of shape (B,)) with one quadrature layout.
+
+    Every terrain, distribution, shear law and slip angle: the contact integrals come from
+    `_contact_batch` (Wong snow's accelerated rule or the any-terrain rule), the start
+    from `_closed_form_start` (Wong snow on the front region, straight running) or
+    `_scan_start`.  The batch is one `optx.root_find` (`BracketedNewton`: Newton kept
+    inside a bracket, bisecting where a step would leave it) with a diagonal Jacobian
+    (the elements are independent), so a Newton step is one tangent evaluation.  Every
+    element's root lies in [lower, upper]: W > target at the deep end, W < target at the
+    shallow one; W need not be monotone in between (a braked wheel's backward shear pulls
+    it down; a layered snow's crust breaks).
+
+    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`).
+    Returns (theta0, R, T, M, F_y, M_z, status).
+    """
+    shear, n, max_steps, thesis = options
+    # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
+    # the solve runs on stopped copies of the inputs.
+    differentiable = (wheel, terrain, distribution, load, slip, side)
+    wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
+    tol = _tolerance(load.dtype)
+    theta_cap, reaches_base = _entry_angle_cap(terrain.depth, wheel.diameter)
+    contact = functools.partial(
+        _contact_batch, shear=shear, n=n, braking=braking, thesis=thesis, bulldozing=bulldozing
+    )
+
+    def vertical(theta0) -> Array:  # W of every element
+        return cast(
+            Array, contact(theta0, slip, wheel, terrain, distribution, side, vertical_only=True)
+        )
+
+    start = _closed_form_start if thesis else _scan_start
+    over, target, lower, upper, s0 = start(
+        vertical, theta_cap, load, slip, guess, wheel, terrain, shear
+    )
 
     def residual(s, params):
         th_cap, tgt, *element = params
-        return _balance_residual(w_batch(_theta_from_s(s, th_cap), *element), tgt)
+        return _balance_residual(
+            contact(_theta_from_s(s, th_cap), *element, vertical_only=True), tgt
+        )
 
-    if guess is None:
-        s0 = _initial_guess(theta_cap, target, diameter, width, snow)
-        if shear != "none":
-            # The shear stress's share of W: one quadrature at the no-shear guess gives the
-            # factor W / W_no_shear, and the closed form is re-solved for load / factor.
-            # Cuts the guess's error from ~4 % to ~0.3 %, one Newton step fewer.
-            theta_g = _theta_from_s(s0, theta_cap)
-            z0_g = jnp.maximum(1 - max_sinkage(theta_g, diameter) / snow.z_w, 0.0)
-            w_ns = diameter / 2 * width * _sigma_cos_integral(theta_g, z0_g, a, snow.p_w)
-            factor = jnp.clip(vertical_load(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
-            factor = jax.lax.stop_gradient(factor)
-            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow)
-    else:
-        s0 = _warm_start(guess, theta_cap)
-    # Every element's root lies in [s_min, S_MAX]: W = capacity > target at s_min and
-    # W ~ 0 < target at S_MAX.  W need not be monotone in between (a braked wheel's
-    # backward shear stress pulls it down: cohesion >> p_w, light load), hence the
-    # bracketed Newton.
     s = solve_elementwise(
         residual,
-        s0,
-        s_min,
-        jnp.full_like(load, S_MAX),
-        (theta_cap, target, slip, diameter, width, snow),
+        jnp.clip(s0, lower, upper),
+        lower,
+        upper,
+        (theta_cap, target, slip, wheel, terrain, distribution, side),
         tol,
         max_steps,
     )
+
+    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M, F_y, M_z) at s
+        over, bottomed = masks
+        th_cap, *element = params
+        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
+        out = contact(theta0, *element, bottomed=bottomed, moving_rule=moving_rule)
+        return (theta0, *cast(tuple, out))
+
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
-    wheel, snow, load, slip = differentiable
+    wheel, terrain, distribution, load, slip, side = differentiable
+    theta_cap = _entry_angle_cap(terrain.depth, wheel.diameter)[0]
     root = (
         (over, over & reaches_base),
         load,
-        (_entry_angle_cap(snow.z_w, wheel.diameter)[0], slip, wheel.diameter, wheel.width, snow),
+        (theta_cap, slip, wheel, terrain, distribution, side),
     )
     s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
-    theta0, w, r, t, m = _root_outputs(s, *root, forces=forces)
+    theta0, w, r, t, m, fy, mz = _root_outputs(s, *root, forces=forces)
     balanced = jnp.abs(w / target - 1) <= 10 * tol  # 1e-8 in float64
     status = jnp.where(
         over,
         jnp.where(reaches_base, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT),
         jnp.where(balanced, Status.CONVERGED, Status.NOT_CONVERGED),
     )
-    return theta0, r, t, m, status.astype(jnp.int32)
+    return theta0, r, t, m, fy, mz, status.astype(jnp.int32)
 
 
-def _solve_batch(wheel, snow, load, slip, guess, shear, n, max_steps, layout):
-    """Solve with the two-panel quadrature when no element brakes, else the four-panel one.
-
-    `layout` is "driving" or "braking" when known before tracing (concrete slips), else
-    "auto": a `lax.cond` on the traced slips picks one at run time.
-    """
-    return _with_rule_for(
-        slip,
-        shear,
-        lambda braking: _solve_layout(wheel, snow, load, slip, guess, shear, n, max_steps, braking),
-        layout,
-    )
-
-
-def _safe_inputs(valid, wheel, terrain, load, slip, distribution=None):
+def _safe_inputs(valid, wheel, terrain, distribution, load, slip):
     """Replace invalid elements by valid reference values so their (discarded) solve is finite."""
     pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
     wheel = jax.tree_util.tree_map(pick, wheel, RigidWheel.thesis_tire())
     terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).reference())
-    if distribution is not None:
-        distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
-    return wheel, terrain, pick(load, 5000.0), pick(slip, 0.2), distribution
+    distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
+    return wheel, terrain, distribution, pick(load, 5000.0), pick(slip, 0.2)
 
 
 def _flush_tiny_slip(slip):
@@ -356,167 +427,6 @@ def _in_chunks(fn, args, size):
     return jax.tree_util.tree_map(lambda x: x.reshape(-1)[:size], out)
 
 
-@eqx.filter_jit
-def _solve_wheel_jit(wheel, snow, load, slip, shear, n, max_steps, guess=None, layout="auto"):
-    shape, dtype, (wheel, snow, load, slip, guess) = _broadcast_leaves(
-        wheel, snow, load, slip, guess
-    )
-    valid = _valid_mask(wheel, snow, None, load, slip, shear)
-    wheel, snow, load, slip, _ = _safe_inputs(valid, wheel, snow, load, slip)
-    slip = _flush_tiny_slip(slip)
-
-    theta0, r, t, m, status = _in_chunks(
-        lambda ops: _solve_batch(*ops, shear=shear, n=n, max_steps=max_steps, layout=layout),
-        (wheel, snow, load, slip, guess),
-        load.shape[0],
-    )
-    nan = jnp.asarray(jnp.nan, dtype)
-    out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
-    return WheelState(
-        entry_angle=out(theta0),
-        sinkage=out(max_sinkage(theta0, wheel.diameter)),
-        motion_resistance=out(r),
-        thrust=out(t),
-        drawbar_pull=out(t - r),
-        torque=out(m),
-        lateral_force=out(jnp.zeros_like(m)),
-        aligning_torque=out(jnp.zeros_like(m)),
-        status=jnp.where(valid, status, Status.INVALID_INPUT).astype(jnp.int32).reshape(shape),
-    )
-
-
-# ---------------------------------------------------------------------------------------
-# Any terrain, any stress distribution
-# ---------------------------------------------------------------------------------------
-
-
-def _scan_grid(terrain, dtype):
-    """Solver variable s at which W is scanned before Newton (increasing: deep to shallow).
-
-    s^2 = S_MIN^2, 8 and S_MAX^2 = 16 (theta0 = the cap, e^-8 of it and 1e-7 of it): W is
-    monotone except for a braked wheel's backward shear, so the grid only has to start
-    Newton, by interpolating ln W linearly in s^2 (exact for a power law) inside the
-    interval that brackets the root.  For a law with breakpoints
-    (`AbstractTerrain.breakpoint_sinkages`: `LayeredSnow`, whose W(theta0) can fall after
-    the ice breaks), s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
-    theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
-    peak; a peak narrower than that can be missed (then a deeper root is returned).
-    """
-    if terrain.breakpoint_sinkages():
-        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
-        s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
-    else:
-        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 3)
-    return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
-
-
-def _solve_general_layout(
-    wheel, terrain, distribution, load, slip, guess, shear, n, max_steps, braking, side, bulldozing
-):
-    """Equilibrium on any terrain / distribution for a flat batch, one quadrature layout.
-
-    Without a warm start, W is first evaluated on a grid of entry angles (`_scan_grid`); the
-    shallowest grid interval where W crosses the load brackets the root (for a layered
-    snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
-    and interpolating ln W linearly in s^2 inside it (exact for a power law) starts
-    Newton, which is kept inside the bracket and bisects where a Newton step would leave
-    it (`BracketedNewton`).
-
-    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`); the
-    lateral force and aligning torque are returned as zeros without it.
-    """
-    # As in `_solve_layout`: the solve runs on stopped copies, `_root_outputs` differentiates.
-    differentiable = (wheel, terrain, distribution, load, slip, side)
-    wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
-    dtype = load.dtype
-    tol = _tolerance(dtype)
-    diameter, width = wheel.diameter, wheel.width
-    theta_cap, reaches_base = _entry_angle_cap(terrain.depth, diameter)
-
-    def contact_batch(theta0, vertical_only, i, d, b, tr, ds, sd):  # explicit parameters
-        fn = lambda th, i, d, b, tr, ds, sd: general_contact(  # noqa: E731
-            th, i, d, b, tr, ds, shear, n, braking, vertical_only, sd, bulldozing
-        )
-        return jax.vmap(fn)(theta0, i, d, b, tr, ds, sd)
-
-    def contact(theta0, vertical_only):
-        return contact_batch(
-            theta0, vertical_only, slip, diameter, width, terrain, distribution, side
-        )
-
-    def vertical(theta0) -> Array:  # W alone
-        return cast(Array, contact(theta0, True))
-
-    s_min = jnp.full_like(load, _s_min(load.dtype))
-    s_max = jnp.full_like(load, S_MAX)
-    if guess is None:
-        s_grid = _scan_grid(terrain, dtype)
-        points = s_grid.shape[0]
-        w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
-            jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
-        )
-        over = ~jnp.any(w_grid >= load, axis=0)
-        target = jnp.where(over, 0.5 * w_grid[0], load)
-        carried = w_grid >= target
-        # The shallowest grid point that carries the target (largest s), kept <= K - 2.
-        k = points - 1 - jnp.argmax(carried[::-1], axis=0)
-        k = jnp.clip(k, 0, points - 2)
-        lower = s_grid[k]
-        upper = s_grid[k + 1]
-        w_lo = jnp.take_along_axis(w_grid, k[None], 0)[0]
-        w_hi = jnp.take_along_axis(w_grid, k[None] + 1, 0)[0]
-        f_lo = jnp.log(jnp.maximum(w_lo, 1e-300) / target)
-        f_hi = jnp.log(jnp.maximum(w_hi, 1e-300) / target)
-        frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
-        s0 = jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
-    else:
-        w_top = vertical(_theta_from_s(s_min, theta_cap))
-        over = w_top < load
-        target = jnp.where(over, 0.5 * w_top, load)
-        lower, upper = s_min, s_max
-        s0 = _warm_start(guess, theta_cap)
-
-    def residual(s, params):
-        th_cap, tgt, *element = params
-        w = cast(Array, contact_batch(_theta_from_s(s, th_cap), True, *element))
-        return _balance_residual(w, tgt)
-
-    s = solve_elementwise(
-        residual,
-        jnp.clip(s0, lower, upper),
-        lower,
-        upper,
-        (theta_cap, target, slip, diameter, width, terrain, distribution, side),
-        tol,
-        max_steps,
-    )
-
-    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M[, F_y, M_z]) at s
-        del moving_rule  # `general_contact`'s nodes move with theta0 already
-        (over,) = masks
-        th_cap, *element = params
-        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
-        return (theta0, *cast(tuple, contact_batch(theta0, False, *element)))
-
-    wheel, terrain, distribution, load, slip, side = differentiable
-    theta_cap = _entry_angle_cap(terrain.depth, wheel.diameter)[0]
-    root = (
-        (over,),
-        load,
-        (theta_cap, slip, wheel.diameter, wheel.width, terrain, distribution, side),
-    )
-    s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
-    theta0, w, r, t, m, *lateral = _root_outputs(s, *root, forces=forces)
-    fy, mz = lateral if side is not None else (jnp.zeros_like(m), jnp.zeros_like(m))
-    balanced = jnp.abs(w / target - 1) <= 10 * tol
-    status = jnp.where(
-        over,
-        jnp.where(reaches_base, Status.BOTTOMED_OUT, Status.ENTRY_ANGLE_LIMIT),
-        jnp.where(balanced, Status.CONVERGED, Status.NOT_CONVERGED),
-    )
-    return theta0, r, t, m, fy, mz, status.astype(jnp.int32)
-
-
 def _side_rules(slip_angle, lateral):
     """Validity rules of the slip angle and the `Lateral` leaves (empty without them)."""
     if slip_angle is None:
@@ -526,55 +436,56 @@ def _side_rules(slip_angle, lateral):
     return rules + Lateral.constraints(lateral)
 
 
-@eqx.filter_jit
-def _solve_general_jit(
-    wheel,
-    terrain,
-    distribution,
-    load,
-    slip,
-    shear,
-    n,
-    max_steps,
-    guess,
-    layout,
-    slip_angle=None,
-    lateral=None,
-):
-    shape, dtype, (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral) = (
-        _broadcast_leaves(wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
+def _side(valid, slip_angle, lateral):
+    """(side, bulldozing): `(tan beta, K_y, gamma)` per element (None without a slip
+    angle), invalid elements replaced by a valid reference."""
+    if slip_angle is None:
+        return None, False
+    pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
+    reference = Lateral(
+        shear_modulus=None if lateral.shear_modulus is None else 0.02,
+        unit_weight=0.0,
+        bulldozing=lateral.bulldozing,
     )
+    lateral = jax.tree_util.tree_map(pick, lateral, reference)
+    side = (jnp.tan(pick(slip_angle, 0.0)), lateral.shear_modulus, lateral.unit_weight)
+    return side, lateral.bulldozing
+
+
+@eqx.filter_jit
+def _solve_jit(
+    wheel, terrain, distribution, load, slip, guess, slip_angle, lateral, options, layout
+):
+    """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
+
+    `options` = (shear, nodes, max_steps, thesis), static; `layout` "driving",
+    "braking" or "auto" (`_with_rule_for`).
+    """
+    shear, n, max_steps, thesis = options
+    trees = (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
+    shape, dtype, trees = _broadcast_leaves(*trees)
+    wheel, terrain, distribution, load, slip, guess, slip_angle, lateral = trees
     valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
     small, large = _magnitude_window(dtype)
     for name, value, ok, _ in _side_rules(slip_angle, lateral):
         valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
-    wheel, terrain, load, slip, distribution = _safe_inputs(
-        valid, wheel, terrain, load, slip, distribution
+    wheel, terrain, distribution, load, slip = _safe_inputs(
+        valid, wheel, terrain, distribution, load, slip
     )
-    if slip_angle is None:
-        side = None
-        bulldozing = False
-    else:
-        pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
-        reference = Lateral(
-            shear_modulus=None if lateral.shear_modulus is None else 0.02,
-            unit_weight=0.0,
-            bulldozing=lateral.bulldozing,
-        )
-        lateral = jax.tree_util.tree_map(pick, lateral, reference)
-        side = (jnp.tan(pick(slip_angle, 0.0)), lateral.shear_modulus, lateral.unit_weight)
-        bulldozing = lateral.bulldozing
+    if thesis:
+        slip = _flush_tiny_slip(slip)
+    side, bulldozing = _side(valid, slip_angle, lateral)
 
     def solve(ops):
-        wh, tr, ds, ld, sl, gs, sd = ops
-        return _with_rule_for(
-            sl,
-            shear,
-            lambda braking: _solve_general_layout(
-                wh, tr, ds, ld, sl, gs, shear, n[braking], max_steps, braking, sd, bulldozing
-            ),
-            layout,
-        )
+        def layout_solve(braking):
+            return _solve_layout(
+                *ops,
+                options=(shear, n[braking], max_steps, thesis),
+                braking=braking,
+                bulldozing=bulldozing,
+            )
+
+        return _with_rule_for(ops[4], shear, layout_solve, layout)
 
     theta0, r, t, m, fy, mz, status = _in_chunks(
         solve, (wheel, terrain, distribution, load, slip, guess, side), load.shape[0]
@@ -753,33 +664,19 @@ def solve_wheel(
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
         side_rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
         _check_rules(side_rules, dtype, *_magnitude_window(dtype))
-    elif _is_thesis_path(terrain, distribution):
-        n = _nodes_for(shear, nodes_per_panel)
-        state = _solve_wheel_jit(
-            wheel,
-            terrain,
-            load,
-            slip,
-            shear,
-            n,
-            int(max_steps),
-            initial_entry_angle,
-            _layout(slip, warm_start=initial_entry_angle is not None),
-        )
-        return _throw_on_failure(state) if throw else state
-    n = _general_nodes_for(shear, nodes_per_panel)
-    state = _solve_general_jit(
+    thesis = slip_angle is None and _is_thesis_path(terrain, distribution)
+    options = (shear, _nodes_for(shear, nodes_per_panel, thesis), int(max_steps), thesis)
+    layout = _layout(slip, warm_start=thesis and initial_entry_angle is not None)
+    state = _solve_jit(
         wheel,
         terrain,
         distribution,
         load,
         slip,
-        shear,
-        n,
-        int(max_steps),
         initial_entry_angle,
-        _layout(slip),
         slip_angle,
         lateral,
+        options,
+        layout,
     )
     return _throw_on_failure(state) if throw else state

@@ -34,23 +34,18 @@ import numpy as np
 from jaxtyping import Array
 
 from .._terrain.shear import _signed_mobilisation
-from .geometry import _sincos_half
+from .geometry import (
+    _rim_sinkage_between,
+    _shear_displacement,
+    _shear_displacement_slope,
+    _sincos_half,
+)
 from .lateral import bulldozing_pressure, combined_mobilisation
 
 # Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
 # README for the measured accuracy.
 DEFAULT_GENERAL_NODES = {"classic": (12, 16), "none": (12, 12)}
 GRADING_POWER = 2
-
-
-def _general_nodes_for(shear: str, nodes_per_panel: int | None) -> tuple[int, int]:
-    """Gauss–Legendre nodes per half-panel (without braking, with braking)."""
-    if nodes_per_panel is None:
-        return DEFAULT_GENERAL_NODES[shear]
-    n = int(nodes_per_panel)
-    if n < 2:
-        raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
-    return n, n
 
 
 @functools.cache
@@ -66,27 +61,42 @@ def _rule(n: int, dtype) -> tuple[Array, Array]:
     return jnp.asarray(t, dtype=dtype), jnp.asarray(w, dtype=dtype)
 
 
+def _power_map(t, w, power):
+    """GL nodes t in [0, 1] mapped to u = t^power, with weights du = power t^(power-1) w:
+    nodes clustered at 0, where the spacing grows like t^power (endpoint singularities and
+    power-law ends of the integrands become smooth in t)."""
+    return t**power, power * t ** (power - 1) * w
+
+
+def _sinh_offsets(u, du, length, scale, min_ratio):
+    """The sinh node map: offsets `x = s sinh(mu u)` from the clustered end of a panel of
+    the given length, and their weights, for u in [0, 1] with weights du.
+
+    `mu = asinh(length / s)` (the last node maps to the far end): the node spacing is ~ s
+    at the clustered end and grows geometrically away from it.  s is clipped to
+    [min_ratio, 10] x length; sinh and cosh come from one exp.
+    """
+    s = jnp.clip(scale, min_ratio * length, 10 * length)
+    mu = jnp.arcsinh(length / s)
+    e = jnp.exp(mu * u)
+    inv = 1 / e
+    return s * 0.5 * (e - inv), s * mu * 0.5 * (e + inv) * du
+
+
 def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype):
     """Nodes and weights on [lo, hi]: two halves graded towards lo and hi respectively.
 
-    `lo`, `hi`, `scale_*` have shape (P,); returns arrays of shape (P * 2 * n,).
+    `lo`, `hi`, `scale_*` have shape (P,); returns arrays of shape (P * 2 * n,).  Each
+    half is the sinh map of the power map (`GRADING_POWER`) of the n-point rule.
     Zero-length panels get zero weights.
     """
-    t, w = _rule(n, dtype)
-    q = GRADING_POWER
-    u = t**q
-    du = q * t ** (q - 1) * w
+    u, du = _power_map(*_rule(n, dtype), GRADING_POWER)
     half = 0.5 * (hi - lo)
     positive = half > 0
     length = jnp.where(positive, half, 1.0)[:, None]
 
     def graded(scale):
-        # s sinh(mu) = length: the last node maps to the panel's far end.
-        s = jax.lax.stop_gradient(jnp.clip(scale[:, None], 1e-3 * length, 10 * length))
-        mu = jnp.arcsinh(length / s)
-        e = jnp.exp(mu * u)
-        inv = 1 / e
-        return s * 0.5 * (e - inv), s * mu * 0.5 * (e + inv) * du
+        return _sinh_offsets(u, du, length, jax.lax.stop_gradient(scale[:, None]), 1e-3)
 
     off_lo, jac_lo = graded(scale_lo)
     off_hi, jac_hi = graded(scale_hi)
@@ -107,14 +117,6 @@ def _safe_arccos(x):
     return jnp.where(inside, jnp.arccos(jnp.where(inside, x, 0.0)), jnp.where(x >= 1, 0.0, jnp.pi))
 
 
-def _rim_sinkage_between(theta_eff, theta0, diameter):
-    """z = r (cos theta_eff - cos theta0) = D sin(d / 2) sin(theta0 - d / 2) [m],
-    d = theta0 - theta_eff in [0, pi] (no cancellation near the entry; the half-angle of d
-    by `_sincos_half`, the sine and cosine of theta0 once per wheel)."""
-    half_sin, half_cos = _sincos_half(theta0 - theta_eff)
-    return diameter * half_sin * (jnp.sin(theta0) * half_cos - jnp.cos(theta0) * half_sin)
-
-
 def _below_base(sinkage, depth):
     """The rim sinkage [m] kept 4 ulp of `depth` [m] above the base.
 
@@ -130,26 +132,42 @@ def _below_base(sinkage, depth):
     return jnp.minimum(sinkage, depth * (1 - 4 * eps))
 
 
-def _braking_split(theta0, theta_r, slip, diameter):
-    """Angle in (theta_r, theta0) where the shear displacement (4.10) changes sign.
+def _layer_width(modulus, radius, slope):
+    """Width [rad] of the layer over which the shear mobilises where (4.10) changes with
+    slope dj/dtheta / r = `slope` [-]: K / (r |slope|), K = `modulus` [m]."""
+    return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
 
-    Returns (angle, has_root).  For slip < 0 (k = 1 - i > 1),
-    f(theta) = (theta0 - theta) - k (sin theta0 - sin theta) is increasing on
-    |theta| < arccos(1/k) and vanishes at theta0; a second root exists when f(lo) < 0
-    and arccos(1/k) < theta0.  Newton from the left end, clipped to the bracket.
+
+def _shear_sign_change(theta0, theta_r, slip, steps):
+    """Where the shear displacement (4.10) of a braked wheel changes sign inside the
+    contact theta_r..theta0: (angle, has_root, theta_star).
+
+    For slip < 0 (k = 1 - i > 1), f(theta) = j / r = (theta0 - theta) - k (sin theta0 -
+    sin theta) is concave and increasing on |theta| < theta_star = arccos(1/k) and
+    vanishes at theta0; a second root exists when f(lo) < 0 and theta_star < theta0,
+    lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
+    left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
+    (unused).
     """
     k = 1 - slip
-    f = lambda th: (theta0 - th) - k * (jnp.sin(theta0) - jnp.sin(th))  # noqa: E731
-    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))
+    sin_theta0 = jnp.sin(theta0)
+    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
     lo = jnp.maximum(theta_r, -theta_star)
-    has_root = (slip < 0) & (f(lo) < 0) & (theta_star < theta0)
+
+    def f_and_slope(th):  # |th| <= pi: the Taylor sine and cosine
+        half_sin, half_cos = _sincos_half(th)
+        sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0)
+        return f, _shear_displacement_slope(cos, slip)
+
+    has_root = (slip < 0) & (f_and_slope(lo)[0] < 0) & (theta_star < theta0)
 
     def newton(_, th):
-        slope = jnp.maximum(-1 + k * jnp.cos(th), 1e-12)
-        return jnp.clip(th - f(th) / slope, lo, theta_star)
+        f, slope = f_and_slope(th)
+        return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
 
-    th = jax.lax.fori_loop(0, 12, newton, lo)
-    return jnp.where(has_root, th, 0.5 * (theta_r + theta0)), has_root
+    angle = jax.lax.fori_loop(0, steps, newton, lo)
+    return angle, has_root, theta_star
 
 
 def general_contact(
@@ -184,9 +202,9 @@ def general_contact(
     theta_r = distribution.exit_angle(theta0, slip)
 
     _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
-    entry_slope = jnp.abs(1 - (1 - slip) * jnp.cos(theta0))
+    entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
     if side is None:
-        entry_scale = k_surface / (r * jnp.maximum(entry_slope, 1e-12))
+        entry_scale = _layer_width(k_surface, r, entry_slope)
     else:
         # Width of the layer where the resultant displacement u rises to ~1.
         tan_beta, k_lateral, unit_weight = side
@@ -199,14 +217,14 @@ def general_contact(
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     if braking and shear != "none":
-        split, has_root = _braking_split(theta0, theta_r, slip, diameter)
-        split = jax.lax.stop_gradient(split)
+        split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12)
+        split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
         z_split = _rim_sinkage_between(
             distribution.stress_angle(split, theta0, slip), theta0, diameter
         )
         k_split = terrain.rim_properties(z_split, width)[3]
-        slope = jnp.abs(-1 + (1 - slip) * jnp.cos(split))
-        split_scale = jnp.where(has_root, k_split / (r * jnp.maximum(slope, 1e-12)), inf)
+        slope = _shear_displacement_slope(jnp.cos(split), slip)
+        split_scale = jnp.where(has_root, _layer_width(k_split, r, slope), inf)
         points.append((split, split_scale))
     for breakpoint in terrain.breakpoint_sinkages():
         # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
@@ -235,7 +253,7 @@ def general_contact(
         if side is not None:
             tau_y = jnp.zeros_like(sigma)
     else:
-        j = r * ((theta0 - theta) - (1 - slip) * (jnp.sin(theta0) - sin))
+        j = _shear_displacement(theta, theta0, slip, r, sin)
         strength = cohesion + sigma * tan_phi
         if side is None:
             tau = strength * _signed_mobilisation(j / modulus)

@@ -5,7 +5,7 @@ from __future__ import annotations
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
-from jaxtyping import Array, Float
+from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
 from .._leaves import _as_float, _check_real_leaves, parameter
@@ -69,3 +69,61 @@ def _sincos_half(theta):
         sin_poly = sin_poly * x2 + cs
         cos_poly = cos_poly * x2 + cc
     return x * sin_poly, cos_poly
+
+
+def rim_sinkage(theta: ArrayLike, entry_angle: ArrayLike, diameter: ArrayLike) -> Array:
+    """Sinkage of the rim point at angle theta, eq. (4.5): `z = D/2 (cos theta - cos theta0)`.
+
+    Written as `D [sin^2(theta0/2) - sin^2(theta/2)]` to avoid cancellation.
+
+    **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `diameter` D [m].
+    **Returns:** z [m].
+    """
+    return jnp.asarray(diameter) * (
+        jnp.sin(jnp.asarray(entry_angle) / 2) ** 2 - jnp.sin(jnp.asarray(theta) / 2) ** 2
+    )
+
+
+def max_sinkage(entry_angle: ArrayLike, diameter: ArrayLike) -> Array:
+    """Maximum sinkage under the axle, eq. (4.6) / (4.15): `z0 = D/2 (1 - cos theta0)`.
+
+    **Arguments:** `entry_angle` theta0 [rad], `diameter` D [m].  **Returns:** z0 [m].
+    """
+    return jnp.asarray(diameter) * jnp.sin(jnp.asarray(entry_angle) / 2) ** 2
+
+
+def _rim_sinkage_between(theta_eff, theta0, diameter):
+    """z = r (cos theta_eff - cos theta0) = D sin(d / 2) sin(theta0 - d / 2) [m],
+    d = theta0 - theta_eff in [0, pi] (no cancellation near the entry; the half-angle of d
+    by `_sincos_half`, the sine and cosine of theta0 once per wheel)."""
+    half_sin, half_cos = _sincos_half(theta0 - theta_eff)
+    return diameter * half_sin * (jnp.sin(theta0) * half_cos - jnp.cos(theta0) * half_sin)
+
+
+def shear_displacement(
+    theta: ArrayLike, entry_angle: ArrayLike, slip: ArrayLike, diameter: ArrayLike
+) -> Array:
+    """Shear displacement along the rim, eq. (4.10).
+
+    `j = D/2 [(theta0 - theta) - (1 - i)(sin theta0 - sin theta)]`.
+
+    **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `slip` i [-] (driving slip,
+    eq. 2.6; negative when braking), `diameter` D [m].  **Returns:** j [m].
+    """
+    return _shear_displacement(
+        jnp.asarray(theta), jnp.asarray(entry_angle), jnp.asarray(slip), jnp.asarray(diameter) / 2
+    )
+
+
+def _shear_displacement(theta, theta0, slip, radius, sin_theta=None, sin_theta0=None):
+    """Eq. (4.10), `j = r [(theta0 - theta) - (1 - i)(sin theta0 - sin theta)]` [m] (the
+    one implementation; `radius` 1 gives j / r).  The sines may be passed in when the
+    caller has them (the quadrature's from `_sincos_half`)."""
+    sin_theta = jnp.sin(theta) if sin_theta is None else sin_theta
+    sin_theta0 = jnp.sin(theta0) if sin_theta0 is None else sin_theta0
+    return radius * ((theta0 - theta) - (1 - slip) * (sin_theta0 - sin_theta))
+
+
+def _shear_displacement_slope(cos_theta, slip):
+    """dj/dtheta / r = -1 + (1 - i) cos theta [-], the derivative of (4.10) along the rim."""
+    return -1 + (1 - slip) * cos_theta
