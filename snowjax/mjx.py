@@ -115,6 +115,7 @@ from ._wheel.contact import ShearModel
 from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import RigidWheel
+from ._wheel.model import ContactModel, _unpack_model
 from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
@@ -512,7 +513,7 @@ def step(
     m: mjx.Model,
     d: mjx.Data,
     wheels: MjxWheels,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     entry_angle: Float[ArrayLike, " n"] | None = None,
     *,
     load: Float[ArrayLike, " n"] | str | None = None,
@@ -557,6 +558,7 @@ def step(
     `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
     `Status.INVALID_INPUT`.
     """
+    snow, shear, distribution, *_ = _unpack_model(snow, shear, distribution)
     shear = _shear_name(shear)
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
@@ -633,7 +635,7 @@ def rollout(
     m: mjx.Model,
     d: mjx.Data,
     wheels: MjxWheels,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     ctrl: Float[ArrayLike, "... nu"],
     num_steps: int,
     *,
@@ -653,6 +655,7 @@ def rollout(
 
     **Returns:** `Rollout`.
     """
+    snow, shear, distribution, *_ = _unpack_model(snow, shear, distribution)
     shear = _shear_name(shear)
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     num_steps = int(num_steps)

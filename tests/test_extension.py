@@ -182,6 +182,16 @@ def test_fit_wheel_recovers_both_new_classes_parameters():
     )
     assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
     assert result.params["rear"] == pytest.approx(0.3, rel=1e-6)
+    by_model = sj.fit_wheel(
+        WHEEL,
+        sj.ContactModel(start, LinearRear(0.5)),
+        LOADS,
+        SLIPS,
+        fit=("modulus", "rear"),
+        sinkage=np.asarray(st.sinkage),
+        drawbar_pull=np.asarray(st.drawbar_pull),
+    )
+    assert by_model.params == result.params
     # From the fields' metadata: units, and log space for the two positive parameters.
     assert result.units == {"modulus": "Pa/m", "rear": "-"}
     assert result.info["transforms"] == {"modulus": "log", "rear": "log"}
@@ -231,3 +241,47 @@ def test_shear_laws_are_modules_or_their_names():
     assert float(thesis.drawbar_pull) == float(
         sj.solve_wheel(WHEEL, fresh, 3000.0, 0.2, "simplified").drawbar_pull
     )
+
+
+def test_a_contact_model_bundles_terrain_distribution_and_shear_law():
+    """`ContactModel` in place of the terrain: the same results as the separate keywords,
+    gradients w.r.t. its leaves, the combination checked when it is built, and a
+    keyword given twice refused."""
+    model = sj.ContactModel(_full(SNOW), _full(REAR), sj.JanosiHanamoto())
+    by_keywords = _solve(distribution=_full(REAR))
+    by_model = sj.solve_wheel(_full(WHEEL), model, LOADS, SLIPS)
+    for field in ("entry_angle", "drawbar_pull", "torque", "status"):
+        np.testing.assert_array_equal(getattr(by_model, field), getattr(by_keywords, field))
+    forces = sj.contact_forces(WHEEL, model, by_model.entry_angle, SLIPS)
+    np.testing.assert_array_equal(
+        forces.vertical_load,
+        sj.contact_forces(WHEEL, _full(SNOW), by_model.entry_angle, SLIPS, distribution=REAR)
+        .vertical_load,
+    )  # fmt: skip
+    np.testing.assert_allclose(forces.vertical_load, LOADS, rtol=1e-8)
+
+    def pull(model):
+        return jnp.sum(sj.solve_wheel(_full(WHEEL), model, LOADS, SLIPS).drawbar_pull)
+
+    def pull_by_keywords(snow, rear):
+        return jnp.sum(_solve(snow, rear).drawbar_pull)
+
+    grad = jax.grad(pull)(model)
+    expected = jax.grad(pull_by_keywords, argnums=(0, 1))(_full(SNOW), _full(REAR))
+    np.testing.assert_allclose(grad.terrain.modulus, expected[0].modulus, rtol=1e-12)
+    np.testing.assert_allclose(grad.distribution.rear, expected[1].rear, rtol=1e-12)
+    assert np.all(np.asarray(grad.distribution.rear) != 0)
+
+    # Spellings: None is the front region, a name is its law; defaults classic, front.
+    default = sj.ContactModel(SNOW, None, "none")
+    assert isinstance(default.distribution, sj.FrontRegion)
+    assert isinstance(default.shear, sj.NoShear)
+    assert isinstance(sj.ContactModel(SNOW).shear, sj.JanosiHanamoto)
+    with pytest.raises(ValueError, match="needs a WongSnow terrain"):
+        sj.ContactModel(SNOW, shear=sj.ThesisSimplified())
+    with pytest.raises(TypeError, match="ContactModel.terrain must be a snowjax.Terrain"):
+        sj.ContactModel(REAR)
+    with pytest.raises(TypeError, match="shear, nodes_per_panel given both"):
+        sj.solve_wheel(WHEEL, model, 1000.0, 0.1, "none", nodes_per_panel=12)
+    with pytest.raises(ValueError, match="nodes_per_panel must be >= 2"):
+        sj.ContactModel(SNOW, nodes_per_panel=1)

@@ -238,6 +238,24 @@ def test_notebook_runs(tmp_path):
     assert "firm: distance" in text
 
 
+def test_a_contact_model_traces_the_same_step(vehicle):
+    """`ContactModel` in place of the terrain: the traced step is the one of the separate
+    keywords (compared as jaxprs: no compile needed)."""
+    _, m, wheels, d0 = vehicle
+    plate = sj.WongReece(0.4, 0.3, -0.1)
+
+    def forces(snow, **keywords):
+        return smjx.step(m, d0, wheels, snow, **keywords)[1].longitudinal_force
+
+    # The distribution as an argument in both, so that its leaves are inputs of both.
+    by_keywords = jax.make_jaxpr(lambda s, p: forces(s, distribution=p))(SNOW, plate)
+    by_model = jax.make_jaxpr(lambda s, p: forces(sj.ContactModel(s, p)))(SNOW, plate)
+    assert str(by_model) == str(by_keywords)
+    model = sj.ContactModel(SNOW, plate)
+    with pytest.raises(TypeError, match="distribution given both"):
+        forces(model, distribution=plate)
+
+
 def test_bad_input_raises(vehicle):
     model, m, wheels, d0 = vehicle
     with pytest.raises(ValueError, match="no body named"):

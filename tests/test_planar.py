@@ -401,6 +401,23 @@ def test_bad_input_raises(kwargs, error, match):
         simulate_planar(vehicle, snow, steering, torque, t1, dt, **args)
 
 
+def test_a_contact_model_traces_the_same_simulation():
+    """`ContactModel` in place of the terrain (with its lateral law): the traced program
+    is the one of the separate keywords (compared as jaxprs: no compile needed)."""
+    lateral = sj.Lateral(shear_modulus=0.02)
+
+    def run(snow, **keywords):
+        return simulate_planar(VEHICLE, snow, 0.1, 100.0, 0.2, 0.1, **keywords).x
+
+    # The lateral law as an argument in both, so that its leaves are inputs of both.
+    by_keywords = jax.make_jaxpr(lambda s, lat: run(s, lateral=lat, shear="none"))(FRESH, lateral)
+    by_model = jax.make_jaxpr(lambda s, lat: run(sj.ContactModel(s, shear="none", lateral=lat)))
+    assert str(by_model(FRESH, lateral)) == str(by_keywords)
+    model = sj.ContactModel(FRESH, shear="none", lateral=lateral)
+    with pytest.raises(TypeError, match="lateral given both"):
+        run(model, lateral=lateral)
+
+
 def test_a_steering_controller_out_of_range_stops_the_run():
     """A controller whose output depends on the state is only known while the program runs:
     `eqx.error_if` stops it there (it used to run unflagged at 3 rad)."""

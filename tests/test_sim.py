@@ -227,6 +227,9 @@ def test_wheel_forces_are_the_regularised_equilibrium(forces_at_states):
     np.testing.assert_allclose(f.longitudinal_force[3], -f.longitudinal_force[1], rtol=1e-12)
     np.testing.assert_allclose(f.resisting_torque[3], -f.resisting_torque[1], rtol=1e-12)
     assert np.all(np.asarray(f.status) == Status.CONVERGED)
+    # The same forces given a ContactModel in place of the terrain.
+    by_model = sj.wheel_forces(v, w, LOAD, WHEEL, sj.ContactModel(SNOW))
+    np.testing.assert_array_equal(by_model.longitudinal_force, f.longitudinal_force)
 
 
 def test_wheel_forces_gradients_at_and_near_rest():
@@ -296,6 +299,11 @@ def test_a_step_not_solved_even_when_retried_stops_the_integration():
     assert traj.result == diffrax.RESULTS.nonlinear_max_steps_reached
     assert float(traj.speed[0]) == 0.0 and np.all(np.isinf(np.asarray(traj.speed[1:])))
     assert np.all(np.asarray(traj.status[1:]) == Status.INVALID_INPUT)
+    # The same run given a ContactModel in place of the terrain.
+    model = sj.ContactModel(SNOW, shear=sj.JanosiHanamoto())
+    by_model = sj.simulate_longitudinal(VEHICLE, model, 545.0, 0.5, DT, newton_steps=1)
+    np.testing.assert_array_equal(by_model.speed, traj.speed)
+    assert by_model.result == traj.result
 
 
 # ----------------------------------------------------------------------------------------

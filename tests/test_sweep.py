@@ -285,6 +285,9 @@ def _definition(**kw):
 def test_a_different_sweep_is_refused(reference, tmp_path):
     out = tmp_path / "s"
     shutil.copytree(reference[0], out)
+    # A ContactModel holding the same terrain is the same sweep: nothing left to compute.
+    r = sj.sweep(WHEEL, sj.ContactModel(SNOW), LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    assert r.complete and r.computed_chunks == 0 and r.skipped_chunks == r.n_chunks
     with pytest.raises(ValueError, match="chunk_size: 8 on disk, 4 now"):
         sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=4, progress=False)
     with pytest.raises(ValueError, match="shear: 'classic' on disk, 'none' now"):

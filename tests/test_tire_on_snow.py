@@ -43,6 +43,8 @@ def straight():
 def test_hand_values_at_one_point():
     load, slip, alpha = 5000.0, 0.2, math.radians(5.0)
     r = tire_forces_on_snow(WHEEL, SNOW, load, slip, alpha)
+    by_model = tire_forces_on_snow(WHEEL, sj.ContactModel(SNOW), load, slip, alpha)
+    assert float(by_model.lateral_force) == float(r.lateral_force)
 
     # Chapter 3 by hand: the load functions (3.17)-(3.21) take F_z in kN and give kN/rad.
     fz = load / 1000.0

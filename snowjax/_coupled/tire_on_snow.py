@@ -33,6 +33,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
 from .._wheel.geometry import RigidWheel
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]
@@ -119,7 +120,7 @@ def _combine_jit(state: WheelState, load, slip, slip_angle, coefficients, parame
 
 def tire_forces_on_snow(
     wheel: RigidWheel,
-    terrain: Terrain,
+    terrain: Terrain | ContactModel,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     slip_angle: Float[ArrayLike, "..."],
@@ -204,6 +205,7 @@ def tire_forces_on_snow(
     Example: `snowjax.tire_forces_on_snow(snowjax.RigidWheel.thesis_tire(),
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
+    terrain, shear, distribution, *_ = _unpack_model(terrain, shear, distribution)
     shear = _shear_name(shear)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")

@@ -40,6 +40,7 @@ from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .core import (
     FitResult,
@@ -412,7 +413,7 @@ def _status_warnings(status: np.ndarray, m: int) -> list[str]:
 
 def fit_wheel(
     wheel: RigidWheel,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     load: Float[ArrayLike, " m"],
     slip: Float[ArrayLike, " m"],
     *,
@@ -533,6 +534,9 @@ def fit_wheel(
     compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
     a second.
     """
+    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     if not isinstance(wheel, RigidWheel):
         raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")

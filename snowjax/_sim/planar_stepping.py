@@ -13,7 +13,7 @@ wheels) are this module's own.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import diffrax
 import equinox as eqx
@@ -27,6 +27,7 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .planar import (
     NUM_WHEELS,
@@ -188,7 +189,7 @@ def _check_steering(steering) -> None:
 
 def simulate_planar(
     vehicle: PlanarVehicle,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     steering: Float[ArrayLike, ""] | SteeringProfile | Callable,
     torque: Float[ArrayLike, "..."] | TorqueProfile | Callable,
     t1: float,
@@ -298,6 +299,9 @@ def simulate_planar(
     that cannot be solved even after the retries stops the integration: `result` is set
     (no exception) and the remaining rows hold inf states.
     """
+    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     if shear == "simplified":
         raise ValueError(
@@ -356,7 +360,7 @@ def simulate_planar(
         steering = jnp.asarray(steering, dtype)
     term = _PlanarTerm(
         vehicle=vehicle,
-        snow=snow,
+        snow=cast(Terrain, snow),
         steering=steering,
         torque=torque,
         lateral=lateral,

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import abc
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import Any, ClassVar, cast
 
 import diffrax
 import equinox as eqx
@@ -47,6 +47,7 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .levenberg_marquardt import _LevenbergMarquardt
 from .vehicle import (
@@ -285,7 +286,7 @@ def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
 
 def simulate_longitudinal(
     vehicle: Vehicle,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     torque: Float[ArrayLike, "..."] | TorqueProfile | Callable,
     t1: float,
     dt: float,
@@ -369,6 +370,9 @@ def simulate_longitudinal(
     differentiated they make lineax raise on the non-finite values inside the implicit
     solves, so optimise positive parameters through their logarithms.
     """
+    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
@@ -400,7 +404,7 @@ def simulate_longitudinal(
         torque = jnp.asarray(torque, dtype)
     term = _VehicleTerm(
         vehicle=vehicle,
-        snow=snow,
+        snow=cast(Terrain, snow),
         torque=torque,
         shear=shear,
         speed_eps=float(speed_eps),

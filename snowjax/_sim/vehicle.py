@@ -93,6 +93,7 @@ from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _validate_eagerly
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
@@ -276,7 +277,7 @@ def wheel_forces(
     wheel_speed: Float[ArrayLike, "..."],
     load: Float[ArrayLike, "..."],
     wheel: RigidWheel,
-    snow: Terrain,
+    snow: Terrain | ContactModel,
     shear: ShearModel | AbstractShearLaw = "classic",
     *,
     speed_eps: float = DEFAULT_SPEED_EPS,
@@ -338,6 +339,9 @@ def wheel_forces(
     range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
+    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     _check_dynamic_shear(shear, "wheel_forces")
     _check_model(wheel, snow, distribution, shear)

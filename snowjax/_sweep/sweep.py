@@ -70,6 +70,7 @@ from jaxtyping import ArrayLike, Float
 from .._terrain.base import Terrain
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.geometry import RigidWheel
+from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .definition import (
     _FORMATS,
@@ -343,7 +344,7 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
 
 def sweep(
     wheel: RigidWheel | Sequence[RigidWheel],
-    snow: Terrain | Sequence[Terrain],
+    snow: Terrain | ContactModel | Sequence[Terrain],
     loads: Float[ArrayLike, " loads"],
     slips: Float[ArrayLike, " slips"],
     *,
@@ -425,6 +426,9 @@ def sweep(
     **Errors:** `ValueError` for out-of-range inputs (naming them), mismatched lengths,
     bad options, or an `out` directory holding a different sweep.
     """
+    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, nodes_per_panel=nodes_per_panel
+    )
     try:
         shear = _shear_name(shear)
     except ValueError as err:

@@ -1,4 +1,7 @@
-"""Rigid wheel on Wong snow: rim geometry, stresses and the contact integrals (chapter 4).
+"""The contact integrals of a rigid wheel (chapter 4): the one entry to the quadrature
+(`_contact_batch`, for the solver and `contact_forces`), the per-point rim stresses, and
+Wong snow's accelerated rule for the front region described below (every other
+combination takes the any-terrain rule of `general.py`).
 
 Notation (thesis, section 4.1): theta is measured from the vertical through the wheel
 centre, theta0 is the entry angle, D the diameter, r = D / 2, b the width.
@@ -65,6 +68,7 @@ from .geometry import (
     max_sinkage,
     shear_displacement,
 )
+from .model import ContactModel, _unpack_model
 from .shear_law import AbstractShearLaw, ShearModel, _shear_name
 
 # Gauss–Legendre nodes per panel, (two-panel rule for batches without braking,
@@ -289,7 +293,7 @@ def _classic_layout(theta0, slip, diameter, snow, entry_scale):
 
     Returns (b1, split, b3, scale2, scale3, scale4).
     """
-    th, has_root, theta_star = _shear_sign_change(theta0, jnp.zeros_like(theta0), slip, 8)
+    th, has_root, theta_star = _shear_sign_change(theta0, None, slip, 8, True)
     slope = _shear_displacement_slope(1 - 2 * _sincos_half(th)[0] ** 2, slip)
     split_scale = _layer_width(snow.shear_modulus, diameter / 2, slope)
     has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
@@ -557,7 +561,7 @@ def _contact_scalar(
 
 def contact_forces(
     wheel: RigidWheel,
-    snow: AbstractTerrain,
+    snow: AbstractTerrain | ContactModel,
     entry_angle: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     shear: ShearModel | AbstractShearLaw = "classic",
@@ -588,6 +592,9 @@ def contact_forces(
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
+    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     from .inputs import _check_model
 

@@ -2,12 +2,15 @@
 
 `solve_wheel` finds the entry angle theta0 at which the vertical resultant of the rim
 stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton
-kept inside a bracket, `BracketedNewton`).
+kept inside a bracket, `BracketedNewton`): one solver (`_solve_layout`) for every
+terrain, stress distribution, shear law and slip angle, whose start is Wong snow's
+closed-form no-shear balance where it applies (`_closed_form_start`) and a scan of W
+otherwise (`_scan_start`).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
 W ~ theta0^3, i.e. `ln W ~ -3 s^2`: in these variables the residual is smooth and
-Newton's method converges in a few steps from the closed-form no-shear guess.  The bound
+Newton's method converges in a few steps from either start.  The bound
 s >= s_min = 1e-6 keeps every iterate strictly inside the snow layer (theta_cap - theta0
 >= 1e-12 theta_cap), where the residual and its derivative are finite.
 
@@ -57,6 +60,7 @@ from .inputs import (
     _validate_eagerly,
 )
 from .lateral import Lateral
+from .model import ContactModel, _unpack_model
 from .root import _implicit_root, _root_outputs
 from .shear_law import AbstractShearLaw, _shear_name
 from .status import Status, _throw_on_failure
@@ -507,7 +511,7 @@ def _solve_jit(
 
 def solve_wheel(
     wheel: RigidWheel,
-    terrain: Terrain,
+    terrain: Terrain | ContactModel,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
     shear: ShearModel | AbstractShearLaw = "classic",
@@ -617,6 +621,9 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
+    terrain, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+        terrain, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
+    )
     shear = _shear_name(shear)
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")

@@ -1,8 +1,11 @@
-"""Contact integrals of a rigid wheel on any terrain law, with any stress distribution.
+"""Contact integrals of a rigid wheel on any terrain law, with any stress distribution;
+the quadrature's node maps and the search for the braking sign change.
 
-This is the path `solve_wheel` and `contact_forces` take for every terrain other than
-`WongSnow` with the thesis's front-region distribution (that case has its own,
-specialised quadrature in `contact.py`).
+`general_contact` is the rule the contact entry (`contact._contact_batch`) takes for
+every combination except `WongSnow` on the front region running straight, for which
+Wong snow's accelerated rule (`contact._contact_scalar`) is used; both rules build their
+nodes from the maps here (`_power_map`, `_sinh_offsets`) and find the braking sign change
+with `_shear_sign_change`.
 
 The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
 sinkage, shear stress by Janosi–Hanamoto from the shear displacement 4.10) are
@@ -138,32 +141,37 @@ def _layer_width(modulus, radius, slope):
     return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
 
 
-def _shear_sign_change(theta0, theta_r, slip, steps):
+def _shear_sign_change(theta0, theta_r, slip, steps, taylor):
     """Where the shear displacement (4.10) of a braked wheel changes sign inside the
-    contact theta_r..theta0: (angle, has_root, theta_star).
+    contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
+    theta_star).
 
     For slip < 0 (k = 1 - i > 1), f(theta) = j / r = (theta0 - theta) - k (sin theta0 -
     sin theta) is concave and increasing on |theta| < theta_star = arccos(1/k) and
     vanishes at theta0; a second root exists when f(lo) < 0 and theta_star < theta0,
     lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
     left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
-    (unused).
+    (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
+    polynomials (faster to run, more code to compile) or XLA's.
     """
-    k = 1 - slip
     sin_theta0 = jnp.sin(theta0)
-    theta_star = jnp.arccos(jnp.clip(1 / k, -1.0, 1.0))  # where dj/dtheta = 0
-    lo = jnp.maximum(theta_r, -theta_star)
-
-    def f_and_slope(th):  # |th| <= pi: the Taylor sine and cosine
-        half_sin, half_cos = _sincos_half(th)
-        sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
-        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0)
-        return f, _shear_displacement_slope(cos, slip)
-
-    has_root = (slip < 0) & (f_and_slope(lo)[0] < 0) & (theta_star < theta0)
+    theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
+    if theta_r is None:  # the front region: lo = 0
+        lo = jnp.zeros_like(theta0)
+        f_lo = theta0 - (1 - slip) * sin_theta0
+    else:
+        lo = jnp.maximum(theta_r, -theta_star)
+        f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0)
+    has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
 
     def newton(_, th):
-        f, slope = f_and_slope(th)
+        if taylor:  # |th| <= pi
+            half_sin, half_cos = _sincos_half(th)
+            sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+        else:
+            sin, cos = jnp.sin(th), jnp.cos(th)
+        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0)
+        slope = _shear_displacement_slope(cos, slip)
         return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
 
     angle = jax.lax.fori_loop(0, steps, newton, lo)
@@ -217,7 +225,7 @@ def general_contact(
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     if braking and shear != "none":
-        split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12)
+        split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
         split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
         z_split = _rim_sinkage_between(
             distribution.stress_angle(split, theta0, slip), theta0, diameter
