@@ -537,7 +537,8 @@ def step(
     - `m`, `d`: `mjx.Model` (Euler integrator) and `mjx.Data`.
     - `wheels`: `MjxWheels` of this model.
     - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-      `LayeredSnow`; SI).  Vmapping over its leaves runs one rollout per terrain.
+      `LayeredSnow`; SI), or a `ContactModel` (its shear law and distribution; then
+      leave those keywords out).  Vmapping over its leaves runs one rollout per terrain.
     - `entry_angle`: warm start theta0 [rad] per wheel, the `entry_angle` output of the
       previous step (None: cold start); changes only the iteration count.
     - `load`: vertical load per wheel [N]: None (default) `wheels.static_load`, the

@@ -351,9 +351,8 @@ def _planar_power(terrain, u, v, r, omega, delta):
     vx, vy = _body_to_wheel(PLANAR, u, v, r, steer)
     out = []
     for lateral in (sj.Lateral(), sj.Lateral(None, 1.2e4, bulldozing=True)):
-        f = _planar_wheel_forces(
-            PLANAR, terrain, u, v, r, omega, steer, "classic", EPS, None, None, 64, None, lateral
-        )
+        contact = sj.ContactModel(terrain, lateral=lateral)
+        f = _planar_wheel_forces(PLANAR, contact, u, v, r, omega, steer, EPS, None, 64)
         terms = (f.drawbar_pull * vx, f.lateral_force * vy, -f.resisting_torque * omega)
         wheel = sum(terms)
         vehicle = jnp.sum(wheel + f.aligning_torque * r[:, None], axis=1)

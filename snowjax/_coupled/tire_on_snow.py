@@ -180,7 +180,8 @@ def tire_forces_on_snow(
     `distribution` and of `parameters` or `coefficients` broadcast with NumPy rules):
 
     - `wheel`: [`snowjax.RigidWheel`][] (diameter [m], width [m]).
-    - `terrain`: any [`snowjax.Terrain`][], e.g. `WongSnow.thesis_fresh_snow()`.
+    - `terrain`: any [`snowjax.Terrain`][], e.g. `WongSnow.thesis_fresh_snow()`, or a
+      [`snowjax.ContactModel`][] (then leave `shear` and `distribution` out).
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [−1, 1]: 0 free rolling, 1 spinning in place,
       negative braking.

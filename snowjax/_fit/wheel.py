@@ -495,7 +495,8 @@ def fit_wheel(
     - `snow`: the terrain, any `snowjax.Terrain` with scalar leaves (SI units: Pa, m,
       N/m^(n+1), N/m^(n+2), N/m^3; see each class): start values of the fitted
       parameters and fixed values of the rest.  Every value must be valid for
-      `solve_wheel`.
+      `solve_wheel`.  Or a `ContactModel` (its shear law, distribution, lateral law and
+      nodes; then leave those keywords out).
     - `load`: F_z [N] (> 0), one per data point (several loads allowed).
     - `slip`: driving slip i [-] in [-1, 1], same length.
     - `sinkage` [m], `drawbar_pull` [N], `motion_resistance` [N]: measured values, same

@@ -326,24 +326,19 @@ def _body_to_wheel(vehicle, u, v, r, steer):
     return c * vx_body + s * vy_body, -s * vx_body + c * vy_body
 
 
-def _planar_wheel_forces(
-    vehicle, snow, u, v, r, omega, steer, shear, speed_eps, guess, n, steps, distribution, lateral
-):
-    """Snow forces on the four wheels at body velocities (u, v, r) and spins omega."""
+def _planar_wheel_forces(vehicle, contact, u, v, r, omega, steer, speed_eps, guess, steps):
+    """Snow forces on the four wheels at body velocities (u, v, r) and spins omega, for a
+    `ContactModel` `contact`."""
     radius = vehicle.wheel.diameter / 2
     vx, vy = _body_to_wheel(vehicle, u, v, r, steer)
     kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
     slip, beta, direction, scale_x, scale_y, compaction = kinematics
     st = solve_wheel(
         vehicle.wheel,
-        snow,
+        contact,
         vehicle.wheel_load,
         slip,
-        shear,
-        distribution=distribution,
         slip_angle=beta,
-        lateral=lateral,
-        nodes_per_panel=n,
         max_steps=steps,
         initial_entry_angle=guess,
     )

@@ -49,34 +49,26 @@ class _PlanarTerm(_WarmStartTerm):
     """Right-hand side of the planar equations of motion, y = (X, Y, psi, u, v, r, omega)."""
 
     vehicle: PlanarVehicle
-    snow: Terrain
+    contact: ContactModel
     steering: Any
     torque: Any
-    lateral: Lateral
-    shear: str = eqx.field(static=True)
     speed_eps: float = eqx.field(static=True)
-    nodes_per_panel: int | None = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    distribution: AbstractStressDistribution | None = None
 
     def forces(self, t, y, hint):
         """(steer angles (4,) [rad], wheel forces) at time t [s] and state y (10,)."""
         steer = self.vehicle.steer_angles(_steering_at(self.steering, t, y))
         f = _planar_wheel_forces(
             self.vehicle,
-            self.snow,
+            self.contact,
             y[3],
             y[4],
             y[5],
             y[6:],
             steer,
-            self.shear,
             self.speed_eps,
             hint,
-            self.nodes_per_panel,
             self.max_wheel_steps,
-            self.distribution,
-            self.lateral,
         )
         return steer, f
 
@@ -239,7 +231,9 @@ def simulate_planar(
 
     - `vehicle`: `PlanarVehicle` (mass [kg], yaw inertia [kg m^2], wheel inertia
       [kg m^2], wheel, wheelbase [m], track width [m], CG position [m], Ackermann flag).
-    - `snow`: the terrain, any `snowjax.Terrain` (SI parameter sets; scalar leaves).
+    - `snow`: the terrain, any `snowjax.Terrain` (SI parameter sets; scalar leaves), or a
+      `ContactModel` (its shear law, distribution, lateral law and nodes; then leave
+      those keywords out).
     - `steering`: steering input delta [rad], |delta| < pi/2, counter-clockwise positive
       (delta > 0 turns left): a number (constant), a `SteeringProfile` (piecewise linear
       in t) or a callable `steering(t, y) -> ()` of the time [s] and the state vector
@@ -360,15 +354,11 @@ def simulate_planar(
         steering = jnp.asarray(steering, dtype)
     term = _PlanarTerm(
         vehicle=vehicle,
-        snow=cast(Terrain, snow),
+        contact=ContactModel(cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel),
         steering=steering,
         torque=torque,
-        lateral=lateral,
-        shear=shear,
         speed_eps=float(speed_eps),
-        nodes_per_panel=nodes_per_panel,
         max_wheel_steps=int(wheel_max_steps),
-        distribution=distribution,
     )
     if adjoint is None:
         adjoint = diffrax.RecursiveCheckpointAdjoint()

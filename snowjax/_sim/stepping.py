@@ -91,13 +91,10 @@ class _VehicleTerm(_WarmStartTerm):
     """Right-hand side of the equations of motion, y = (v, x, omega_1..n)."""
 
     vehicle: Vehicle
-    snow: Terrain
+    contact: ContactModel
     torque: Any
-    shear: str = eqx.field(static=True)
     speed_eps: float = eqx.field(static=True)
-    nodes_per_panel: int | None = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    distribution: AbstractStressDistribution | None = None
 
     def forces(self, y, hint):
         """Wheel forces at state(s) y [..., n + 2] (warm start `hint`, or None)."""
@@ -106,13 +103,10 @@ class _VehicleTerm(_WarmStartTerm):
             y[..., 2:],
             self.vehicle.wheel_load,
             self.vehicle.wheel,
-            self.snow,
-            self.shear,
+            self.contact,
             self.speed_eps,
             hint,
-            self.nodes_per_panel,
             self.max_wheel_steps,
-            self.distribution,
         )
 
     def vf(self, t, y, args):
@@ -322,7 +316,8 @@ def simulate_longitudinal(
 
     - `vehicle`: `Vehicle` (mass [kg], wheel inertia [kg m^2], wheel, number of wheels).
     - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`,
-      `ReeceSoil`, `LayeredSnow`; SI); scalar leaves.
+      `ReeceSoil`, `LayeredSnow`; SI); scalar leaves.  Or a `ContactModel` (its shear
+      law, distribution and nodes; then leave those keywords out).
     - `torque`: applied torque per wheel T [N m], positive driving forwards: a number
       or an array of shape (n,) (constant), a `TorqueProfile` (piecewise linear in t),
       or a callable `torque(t, speed, wheel_speed) -> () or (n,)` (a controller; make it
@@ -404,13 +399,10 @@ def simulate_longitudinal(
         torque = jnp.asarray(torque, dtype)
     term = _VehicleTerm(
         vehicle=vehicle,
-        snow=cast(Terrain, snow),
+        contact=ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),
         torque=torque,
-        shear=shear,
         speed_eps=float(speed_eps),
-        nodes_per_panel=nodes_per_panel,
         max_wheel_steps=64,
-        distribution=distribution,
     )
     if adjoint is None:
         adjoint = diffrax.RecursiveCheckpointAdjoint()

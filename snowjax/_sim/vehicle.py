@@ -77,7 +77,7 @@ The time stepping of these equations is `stepping.simulate_longitudinal`.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import diffrax
 import equinox as eqx
@@ -211,23 +211,12 @@ class WheelForces(eqx.Module):
     status: Int[Array, "..."]
 
 
-def _wheel_forces(
-    speed, wheel_speed, load, wheel, snow, shear, speed_eps, guess, n, steps, distribution=None
-):
+def _wheel_forces(speed, wheel_speed, load, wheel, contact, speed_eps, guess, steps):
+    """`WheelForces` for a `ContactModel` `contact` (checked inputs; `wheel_forces`)."""
     slip, direction, scale, compaction = _kinematics(
         speed, wheel_speed, wheel.diameter / 2, speed_eps
     )
-    st = solve_wheel(
-        wheel,
-        snow,
-        load,
-        slip,
-        shear,
-        distribution=distribution,
-        nodes_per_panel=n,
-        max_steps=steps,
-        initial_entry_angle=guess,
-    )
+    st = solve_wheel(wheel, contact, load, slip, max_steps=steps, initial_entry_angle=guess)
     return WheelForces(
         longitudinal_force=direction * scale * (st.thrust - compaction * st.motion_resistance),
         resisting_torque=direction * scale * st.torque,
@@ -308,7 +297,9 @@ def wheel_forces(
     - `wheel_speed`: omega, spin of the wheel [rad/s] (positive rolls forwards).
     - `load`: vertical load F_z on the wheel [N], > 0.
     - `wheel`, `snow`: `RigidWheel` (D, b [m]) and the terrain, any `snowjax.Terrain`
-      (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets).
+      (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets), or a
+      `ContactModel` in place of the terrain (then leave `shear`, `distribution` and
+      `nodes_per_panel` out).
     - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
       refused: its braking extension can push a braked wheel forward).
     - `speed_eps`: regularisation speed [m/s], > 0.
@@ -357,13 +348,10 @@ def wheel_forces(
         jnp.asarray(wheel_speed, dtype),
         jnp.asarray(load, dtype),
         wheel,
-        snow,
-        shear,
+        ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),
         float(speed_eps),
         initial_entry_angle,
-        nodes_per_panel,
         int(max_steps),
-        distribution,
     )
 
 

@@ -376,7 +376,8 @@ def sweep(
     - `wheel`: `RigidWheel`, or a list of them.  Leaves may be scalars or 1-D arrays
       (a leading batch of parameter sets).
     - `snow`: the terrain: a `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-      `LayeredSnow`; SI leaves, see their docs), or a list of terrains of one type;
+      `LayeredSnow`; SI leaves, see their docs), a list of terrains of one type, or a
+      `ContactModel` (its shear law, distribution and nodes; then leave those out);
       leaves scalar or 1-D like `wheel`.  In grid mode every leaf that varies (of
       wheel, terrain and distribution together) must have the same length P: parameter
       set p takes element p of each of them (zipped).

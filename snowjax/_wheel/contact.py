@@ -580,7 +580,8 @@ def contact_forces(
     **Arguments:**
 
     - `wheel`: `RigidWheel`; `snow`: any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-      `LayeredSnow`), SI.
+      `LayeredSnow`), SI, or a `ContactModel` (then leave `shear`, `distribution` and
+      `nodes_per_panel` out).
     - `entry_angle`: theta0 [rad], 0 < theta0 <= arccos(1 - 2 depth / D).
     - `slip`: driving slip i [-], eq. (2.6); negative when braking.
     - `shear`: the shear law, `JanosiHanamoto()` / `"classic"` (4.11),

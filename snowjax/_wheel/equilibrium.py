@@ -547,7 +547,9 @@ def solve_wheel(
       tan_phi [-], shear_modulus [m])`, `BekkerSoil(n [-], k_c [N/m^(n+1)],
       k_phi [N/m^(n+2)], cohesion [Pa], tan_phi [-], shear_modulus=[m])`,
       `ReeceSoil(n, k_c_prime [-], k_phi_prime [-], unit_weight [N/m^3], cohesion [Pa],
-      tan_phi, shear_modulus=[m])` or `LayeredSnow(top, bottom, ice_failure_pressure [Pa])`.
+      tan_phi, shear_modulus=[m])` or `LayeredSnow(top, bottom, ice_failure_pressure [Pa])`;
+      or a `ContactModel` bundling the terrain with `shear`, `distribution`, `lateral`
+      and `nodes_per_panel` (then leave those keywords out).
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [-1, 1] (eq. 2.6: 0 free rolling, 1 spinning in
       place).  Negative slip is braking: the shear displacement, and with it the shear
