@@ -1,10 +1,11 @@
 """`ContactModel`: the terrain, stress distribution, shear law, lateral law and quadrature
 settings of the wheel–terrain contact, as one module.
 
-Every function that takes a terrain takes a `ContactModel` in its place (`solve_wheel`,
-`contact_forces`, `wheel_forces`, both simulations, `snowjax.mjx`, `sweep`, `fit_wheel`,
-`tire_forces_on_snow`); the separate keywords (`shear=`, `distribution=`, `lateral=`,
-`nodes_per_panel=`) keep working for a bare terrain.
+The functions that solve or integrate the wheel's contact take a `ContactModel` in place
+of the terrain (`solve_wheel`, `contact_forces`, `wheel_forces`, both simulations,
+`snowjax.mjx`, `sweep`, `fit_wheel`, `tire_forces_on_snow`; not the per-point stresses
+`normal_stress` / `shear_stress`, nor the plate fits); the separate keywords (`shear=`,
+`distribution=`, `lateral=`, `nodes_per_panel=`) keep working for a bare terrain.
 """
 
 from __future__ import annotations
