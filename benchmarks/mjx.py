@@ -123,7 +123,8 @@ def main(argv=None):
         " per step (per wheel) | wheel forces / MJX step | first-call compile (MJX + snowjax) |"
     )
     lines = [head, "|---|---|---|---|---|---|---|"]
-    table = Table(title="snowjax wheel forces inside MJX (float64, 4 wheels, CPU)")
+    platform = jax.default_backend().upper()
+    table = Table(title=f"snowjax wheel forces inside MJX (float64, 4 wheels, {platform})")
     for col in (
         "envs",
         "steps",

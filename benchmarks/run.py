@@ -269,13 +269,18 @@ def gpu_rows(quick):
     throughput for batches up to 10^7, the gradient ratios and the in-step latency for
     10^4 vehicles of 4 wheels."""
     rows, numbers = [], {}
+
+    def done(row):  # each row on stderr as it is measured (stdout carries the JSON)
+        rows.append(row)
+        print(" | ".join(row), file=sys.stderr, flush=True)
+
     sizes = [10_000, 100_000, 1_000_000] + ([] if quick else [10_000_000])
     for dtype, name in ((np.float32, "float32"), (np.float64, "float64")):
         for n in sizes:
             rate, t, st = throughput(n, dtype=dtype, repeats=3)
             ok = float(np.mean(np.asarray(st.status) == 0))
             numbers[f"gpu_throughput_{name}_{n}"] = rate
-            rows.append(
+            done(
                 (
                     f"GPU solve_wheel {name}, batch {n:,}",
                     f"{rate:,.0f} /s",
@@ -288,7 +293,7 @@ def gpu_rows(quick):
     for name in ("jacfwd", "grad"):
         ratio = times[name] / times["forward"]
         numbers[f"gpu_gradient_ratio_{name}"] = ratio
-        rows.append(
+        done(
             (
                 f"GPU {name} w.r.t. (p_w, z_w, tan phi), batch {n_grad:,}",
                 f"{ratio:.2f} x forward",
@@ -297,7 +302,7 @@ def gpu_rows(quick):
         )
     lat = in_step_latency(100 if quick else 300, n_vehicles=10_000)
     numbers["gpu_in_step_ns_per_wheel"] = lat * 1e9
-    rows.append(
+    done(
         (
             "GPU in-step latency, 10,000 vehicles x 4 wheels (lax.scan, warm start)",
             f"{lat * 1e9:.1f} ns per wheel",
@@ -320,7 +325,8 @@ def _run_gpu_child(quick):
     """The GPU rows and the GPU's name, from `run.py --gpu-child` (default platform)."""
     env = {k: v for k, v in os.environ.items() if k != "JAX_PLATFORMS"}
     cmd = [sys.executable, __file__, "--gpu-child"] + (["--quick"] if quick else [])
-    out = subprocess.run(cmd, capture_output=True, text=True, env=env, check=True)
+    # stderr passes through: the child prints each row as it is measured.
+    out = subprocess.run(cmd, stdout=subprocess.PIPE, text=True, env=env, check=True)
     result = json.loads(out.stdout.strip().splitlines()[-1])
     return [tuple(r) for r in result["rows"]], result["numbers"], result["machine"]
 
