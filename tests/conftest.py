@@ -1,9 +1,10 @@
 import os
 
-# The suite's cost is XLA compiling (about 1,050 of its 1,860 worker-seconds on 2 cores,
-# 2026-11-26), not running: without LLVM's optimisation passes a solve compiles about 30 %
-# faster (tests/test_wheel.py: 108 s of compiling against 75 s) and the simulations' long
-# runs lose less than that.  Tests only (the notebook kernels and subprocesses they start
+# The suite is compile-bound: XLA compiling took 1,050 of its 1,860 worker-seconds on 2
+# cores even with LLVM's optimisation passes off (2026-11-26).  Without those passes a
+# solve compiles about 30 % faster (tests/test_wheel.py: 75 s of compiling against 108 s)
+# and the simulations' long runs lose less than that: a fresh clone's tests took 13 min
+# 51 s against 18 min 10 s.  Tests only (the notebook kernels and subprocesses they start
 # inherit it); the library and the benchmarks compile with XLA's defaults.
 os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
 # No persistent compilation cache: writing such unoptimised executables to it crashed a
