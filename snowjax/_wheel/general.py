@@ -156,12 +156,9 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor):
     """
     sin_theta0 = jnp.sin(theta0)
     theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
-    if theta_r is None:  # the front region: lo = 0
-        lo = jnp.zeros_like(theta0)
-        f_lo = _shear_displacement(lo, theta0, slip, 1.0, lo, sin_theta0)  # sin 0 = 0
-    else:
-        lo = jnp.maximum(theta_r, -theta_star)
-        f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0)
+    # The front region (theta_r None) starts at lo = 0.
+    lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
+    f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0)
     has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
 
     def newton(_, th):
