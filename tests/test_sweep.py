@@ -66,7 +66,8 @@ class _Background:
             # The same sweep on 4 (virtual CPU) devices, in a fresh process.
             env = dict(
                 os.environ,
-                XLA_FLAGS="--xla_force_host_platform_device_count=4",
+                XLA_FLAGS=os.environ.get("XLA_FLAGS", "")
+                + " --xla_force_host_platform_device_count=4",
                 JAX_PLATFORMS="cpu",
             )
             self.proc = subprocess.Popen(

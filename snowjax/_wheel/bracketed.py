@@ -115,9 +115,13 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
     would make every element of the batch pay for its extra Newton steps.  All elements
     take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered
     in groups of `STRAGGLERS`, solved on their own from where they stopped, and scattered
-    back.  Forward-mode derivatives w.r.t. `params` come from each `optx.root_find`'s
-    implicit adjoint; reverse mode does not pass the groups' `lax.while_loop`
-    (`solve_wheel` passes stopped parameters and differentiates at the root instead).
+    back.  A batch of at most `STRAGGLERS` elements is one such group from the start: one
+    solve of `max_steps` (one compiled loop instead of two; its elements that finish
+    early take Newton steps inside their bracket until the last one finishes, which only
+    refines them, by less than the tolerance).  Forward-mode derivatives w.r.t. `params`
+    come from each `optx.root_find`'s implicit adjoint; reverse mode does not pass the
+    groups' `lax.while_loop` (`solve_wheel` passes stopped parameters and differentiates
+    at the root instead).
 
     **Arguments:** `residual(y, params) -> f` elementwise, `y0`, `lower`, `upper` (1-D,
     bracketing a sign change, `f(lower) > 0 > f(upper)`), `params` (a pytree of arrays with
@@ -140,6 +144,10 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
             tags=tags,
         )
 
+    size = y0.shape[0]
+    if size <= STRAGGLERS:
+        # One group holds the whole batch: one solve, one compiled loop.
+        return solve(y0, lower, upper, params, max_steps).value
     first = solve(y0, lower, upper, params, min(FIRST_PHASE_STEPS, max_steps))
     rest = max_steps - FIRST_PHASE_STEPS
     if rest <= 0:
@@ -147,8 +155,7 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
     y, state = first.value, first.state
     converged, collapsed = _finished(state, y, tol, tol)
     left = ~(converged | collapsed)
-    size = y.shape[0]
-    m = min(STRAGGLERS, size)
+    m = STRAGGLERS
 
     def next_group(carry):
         # Up to m stragglers gathered, solved from where they stopped, scattered back.
