@@ -35,10 +35,8 @@ def test_a_large_batch_and_its_single_group_slices_agree():
     rounding, 9e-16; 110 of the 200 elements are stragglers)."""
     n = 3 * STRAGGLERS + 8
     params = _params(n)
-    early = solve_elementwise(
-        _residual, jnp.full(n, 5.0), jnp.zeros(n), jnp.full(n, 10.0), params, TOL,
-        FIRST_PHASE_STEPS,
-    )  # fmt: skip
+    bracket = (jnp.zeros(n), jnp.full(n, 10.0))
+    early = solve_elementwise(_residual, jnp.full(n, 5.0), *bracket, params, TOL, FIRST_PHASE_STEPS)
     stragglers = np.abs(np.asarray(_residual(early, params))) > TOL
     assert stragglers.sum() > STRAGGLERS  # more than one group of them
     whole = np.asarray(_solve(params))
