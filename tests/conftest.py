@@ -2,12 +2,14 @@ import os
 import subprocess
 import sys
 
-# The suite is compile-bound: XLA compiling took 1,050 of its 1,860 worker-seconds on 2
-# cores even with LLVM's optimisation passes off (2026-11-26).  Without those passes a
-# solve compiles about 30 % faster (tests/test_wheel.py: 75 s of compiling against 108 s)
-# and the simulations' long runs lose less than that: a fresh clone's tests took 13 min
-# 51 s against 18 min 10 s.  Tests only (the notebook kernels and subprocesses they start
-# inherit it); the library and the benchmarks compile with XLA's defaults.
+# The suite is compile-bound: tracing, lowering and compiling took 1,290 of its 1,640
+# worker-seconds on 2 cores with LLVM's optimisation passes off (2026-11-26).  Without
+# those passes a solve compiles about 30 % faster (tests/test_wheel.py: 75 s of
+# compiling against 108 s) and the simulations' long runs lose less than that.  With the
+# elemental emitters below as well, a fresh clone's tests took 8 min 36 s (13 min 51 s
+# without them and before small batches became one Newton loop; 18 min 10 s with XLA's
+# defaults).  Tests only (the notebook kernels and subprocesses they start inherit both);
+# the library and the benchmarks compile with XLA's defaults.
 os.environ.setdefault("JAX_DISABLE_MOST_OPTIMIZATIONS", "1")
 # XLA:CPU's fusion emitters (its default code generator) take twice as long to compile a
 # wheel solve as the classic elemental emitters (2.8 s against 5.6 s for three solves,
