@@ -14,7 +14,7 @@ import numpy as np
 
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
-from .distribution import AbstractStressDistribution, _is_front
+from .distribution import AbstractStressDistribution
 from .geometry import RigidWheel
 from .shear_law import _shear_law
 
@@ -156,24 +156,26 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
 
     Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
     """
-    front = _is_front(distribution)
-    known = _checked_parameters(wheel, terrain, shear) if front else None
+    known = _checked_parameters(wheel, terrain, shear)
     parameter_key = (
         known if known is not None else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
     )
-    dtype = _working_dtype_of(parameter_key + _leaf_key((load, slip)), (wheel, terrain, load, slip))
+    trees = (wheel, terrain, distribution, load, slip)
+    key = parameter_key + _leaf_key(jax.tree_util.tree_leaves((distribution, load, slip)))
+    dtype = _working_dtype_of(key, trees)
     small, large = _magnitude_window(dtype)
     to_np = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
     with np.errstate(invalid="ignore", over="ignore"):
-        if known is not None:
-            rules = _argument_rules(to_np(load), to_np(slip))
+        if known is not None:  # the wheel and terrain rules passed before: the rest
+            d, ld, sl = jax.tree_util.tree_map(to_np, (distribution, load, slip))
+            rules = _argument_rules(ld, sl)
+            if d is not None:
+                rules += type(d).constraints(d, sl)
         else:
-            w, t, d, ld, sl = jax.tree_util.tree_map(
-                to_np, (wheel, terrain, distribution, load, slip)
-            )
+            w, t, d, ld, sl = jax.tree_util.tree_map(to_np, trees)
             rules = _checks(w, t, d, ld, sl, shear)
     _check_rules(rules, dtype, small, large)
-    if known is None and front:
+    if known is None:
         _remember_checked(wheel, terrain, shear, parameter_key)
 
 
