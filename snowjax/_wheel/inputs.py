@@ -14,7 +14,7 @@ import numpy as np
 
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
-from .distribution import AbstractStressDistribution
+from .distribution import AbstractStressDistribution, _is_front
 from .geometry import RigidWheel
 from .shear_law import _shear_law
 
@@ -160,17 +160,19 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     parameter_key = (
         known if known is not None else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
     )
+    front = _is_front(distribution)  # no leaves, no rules
     trees = (wheel, terrain, distribution, load, slip)
-    key = parameter_key + _leaf_key(jax.tree_util.tree_leaves((distribution, load, slip)))
-    dtype = _working_dtype_of(key, trees)
+    key = parameter_key + (() if front else _leaf_key(jax.tree_util.tree_leaves(distribution)))
+    dtype = _working_dtype_of(key + _leaf_key((load, slip)), trees)
     small, large = _magnitude_window(dtype)
     to_np = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
     with np.errstate(invalid="ignore", over="ignore"):
         if known is not None:  # the wheel and terrain rules passed before: the rest
-            d, ld, sl = jax.tree_util.tree_map(to_np, (distribution, load, slip))
-            rules = _argument_rules(ld, sl)
-            if d is not None:
-                rules += type(d).constraints(d, sl)
+            slip_np = to_np(slip)
+            rules = _argument_rules(to_np(load), slip_np)
+            if not front:
+                d = jax.tree_util.tree_map(to_np, distribution)
+                rules += type(d).constraints(d, slip_np)
         else:
             w, t, d, ld, sl = jax.tree_util.tree_map(to_np, trees)
             rules = _checks(w, t, d, ld, sl, shear)
