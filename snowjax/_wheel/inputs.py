@@ -41,9 +41,12 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
         for name, value, ok, allowed in kind.constraints(terrain, shear)
         + kind.wheel_constraints(terrain, wheel.width)
     ]
-    if distribution is not None:
-        rules += type(distribution).constraints(distribution, slip)
-    return rules
+    return rules + _distribution_rules(distribution, slip)
+
+
+def _distribution_rules(distribution, slip):
+    """The distribution's slip-dependent rules (unbound call, as above); none for None."""
+    return [] if distribution is None else type(distribution).constraints(distribution, slip)
 
 
 def _argument_rules(load, slip):
@@ -172,7 +175,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
             rules = _argument_rules(to_np(load), slip_np)
             if not front:
                 d = jax.tree_util.tree_map(to_np, distribution)
-                rules += type(d).constraints(d, slip_np)
+                rules += _distribution_rules(d, slip_np)
         else:
             w, t, d, ld, sl = jax.tree_util.tree_map(to_np, trees)
             rules = _checks(w, t, d, ld, sl, shear)
