@@ -7,6 +7,7 @@ gives empty results.
 import re
 
 import jax
+import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -116,3 +117,13 @@ def test_reused_parameter_sets_are_still_checked_with_each_load_and_slip():
     sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3)
     with pytest.raises(ValueError, match="snow.cohesion must be finite and > 0 Pa"):
         sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3, shear="simplified")
+
+
+def test_a_checked_wheel_and_terrain_still_check_the_distribution():
+    """The eager checks remember a validated (wheel, terrain) pair; the distribution's
+    slip-dependent rules are checked on every call all the same."""
+    wheel = sj.RigidWheel(jnp.asarray(0.8), jnp.asarray(0.3))
+    soil = sj.BekkerSoil.snow_us()
+    sj.solve_wheel(wheel, soil, 800.0, 0.2, distribution=sj.WongReece(0.43, 0.32))
+    with pytest.raises(ValueError, match=r"distribution\.c1 \+ c2 \* slip"):
+        sj.solve_wheel(wheel, soil, 800.0, 0.2, distribution=sj.WongReece(-0.5, 0.32))
