@@ -37,11 +37,26 @@ def layered(p1, zw1, p2, zw2, p_fail):
 
 
 def contact(
-    theta0, slip, D, b, law, c, tan_phi, K, fm=0.0, fr=0.0, shear="classic", z_f=None, lower=None
+    theta0,
+    slip,
+    D,
+    b,
+    law,
+    c,
+    tan_phi,
+    K,
+    fm=0.0,
+    fr=0.0,
+    shear="classic",
+    z_f=None,
+    lower=None,
+    mobilisation=None,
 ):
     """(W, R, T, M) by adaptive quadrature over theta_r .. theta0.
 
     `lower` = (c, tan_phi, K) of the layer below the ice, used past the failure sinkage.
+    `mobilisation(x)`: the factor g(j / K) of tau = (c + sigma tan phi) g (default the
+    mirrored Janosi–Hanamoto `sign(x) (1 - exp(-|x|))`).
     """
     r = D / 2
     tm, tr = fm * theta0, fr * theta0
@@ -63,6 +78,8 @@ def contact(
         if lower is not None and r * (math.cos(theta_eff(th)) - math.cos(theta0)) >= z_f:
             c_, tp_, k_ = lower
         x = j / k_
+        if mobilisation is not None:
+            return (c_ + sig(th) * tp_) * mobilisation(x)
         return (c_ + sig(th) * tp_) * math.copysign(-math.expm1(-abs(x)), x)
 
     pts = {tr, tm, theta0}
@@ -121,6 +138,7 @@ def solve(
     depth=math.inf,
     shallowest=False,
     lower=None,
+    mobilisation=None,
 ):
     """theta0 with W(theta0) = load by brentq (the shallowest root if `shallowest`).
 
@@ -129,7 +147,8 @@ def solve(
     theta_max = math.radians(85.0)
     if 2 * depth / D < 2:
         theta_max = min(theta_max, math.acos(1 - 2 * depth / D))
-    W = lambda th: contact(th, slip, D, b, law, c, tan_phi, K, fm, fr, shear, z_f, lower)[0] - load  # noqa: E731
+    args = (D, b, law, c, tan_phi, K, fm, fr, shear, z_f, lower, mobilisation)
+    W = lambda th: contact(th, slip, *args)[0] - load  # noqa: E731
     lo, hi = 1e-4, theta_max * (1 - 1e-12)
     if shallowest:
         grid = np.linspace(lo, hi, 1000)
@@ -137,4 +156,4 @@ def solve(
         k = next(i for i, v in enumerate(vals) if v >= 0)
         lo, hi = grid[k - 1], grid[k]
     theta0 = optimize.brentq(W, lo, hi, xtol=1e-15, rtol=1e-14)
-    return theta0, contact(theta0, slip, D, b, law, c, tan_phi, K, fm, fr, shear, z_f, lower)
+    return theta0, contact(theta0, slip, *args)

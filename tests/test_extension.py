@@ -7,10 +7,15 @@ API only (`snowjax.AbstractTerrain`, `snowjax.AbstractStressDistribution`,
 `snowjax.parameter`, `snowjax.as_float`), and then run through `solve_wheel` (checked
 against the independent SciPy reference of `tests/reference_terrain.py`), `jax.grad`
 (against central differences), `fit_wheel` and `sweep`, with no other edit anywhere:
-the recipe of CONTRIBUTING's "Adding a terrain law or a stress distribution".
+the recipe of CONTRIBUTING's "Adding a terrain law, a stress distribution or a shear
+law".  A
+shear law (`KondnerShear`) likewise, through both contact rules.
 """
 
 from __future__ import annotations
+
+import math
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -285,3 +290,62 @@ def test_a_contact_model_bundles_terrain_distribution_and_shear_law():
         sj.solve_wheel(WHEEL, model, 1000.0, 0.1, "none", nodes_per_panel=12)
     with pytest.raises(ValueError, match="nodes_per_panel must be >= 2"):
         sj.ContactModel(SNOW, nodes_per_panel=1)
+
+
+class KondnerShear(sj.AbstractShearLaw):
+    """Kondner's hyperbolic mobilisation, g = (j / K) / (1 + |j / K|): the shear stress
+    rises like Janosi–Hanamoto's at small displacement and approaches the strength as
+    1 / j instead of exponentially (Kondner 1963, "Hyperbolic stress-strain response:
+    cohesive soils", J. Soil Mech. Found. Div. 89(SM1):115-143)."""
+
+    name: ClassVar[str] = "kondner"
+    nodes_closed_form: ClassVar = (12, (12, 12, 12, 12))
+    nodes_any_terrain: ClassVar = (12, 16)
+
+    def check(self, terrain, distribution) -> None:
+        """Applies everywhere."""
+
+    def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain):
+        x = j / modulus
+        return x / (1 + jnp.abs(x))
+
+    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
+        # The sign change is that of j, as for Janosi–Hanamoto.
+        return sj.JanosiHanamoto.braking_panels(
+            self, theta0, slip, diameter, terrain, z0_rel, entry_scale
+        )
+
+    def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel):
+        r = diameter / 2
+        x = r * (theta0 - (1 - slip) * jnp.sin(theta0)) / terrain.shear_modulus
+        # dg/dtheta = g'(x) dx/dtheta, dj/dtheta = -r i at theta = 0.
+        return x / (1 + jnp.abs(x)), -r * slip / terrain.shear_modulus / (1 + jnp.abs(x)) ** 2
+
+
+def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
+    """`KondnerShear` (one class, public API only) through `solve_wheel` on the new
+    terrain (the any-terrain rule) and `contact_forces` on Wong snow's front region (the
+    closed-form rule, whose singularity subtraction uses the law's axle values), against
+    the SciPy reference with the same mobilisation; driving and braking."""
+    law = KondnerShear()
+    kondner = lambda x: x / (1 + abs(x))  # noqa: E731
+    st = sj.solve_wheel(_full(WHEEL), _full(SNOW), LOADS, SLIPS, law)
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED), st.status
+    hyperbolic = lambda z, b: 4e5 * max(z, 0.0) / (1 - max(z, 0.0) / 0.25)  # noqa: E731
+    for k in range(N):
+        theta0, (w, r, t, m) = ref.solve(
+            LOADS[k], SLIPS[k], 0.736, 0.235, hyperbolic, 2e3, 0.2, 0.01,
+            depth=0.25, mobilisation=kondner,
+        )  # fmt: skip
+        assert float(st.entry_angle[k]) == pytest.approx(theta0, rel=1e-7)
+        assert float(st.drawbar_pull[k]) == pytest.approx(t - r, rel=1e-6, abs=1e-7 * LOADS[k])
+    snow = sj.WongSnow(2e4, 0.2, 1e3, 0.3, 0.02)
+    theta0 = np.array([0.3, 0.5, 0.3, 0.5])
+    forces = sj.contact_forces(WHEEL, snow, theta0, SLIPS, law)
+    wong = lambda z, b: -2e4 * math.log1p(-z / 0.2)  # noqa: E731
+    for k in range(N):
+        exp = ref.contact(
+            theta0[k], SLIPS[k], 0.736, 0.235, wong, 1e3, 0.3, 0.02, mobilisation=kondner
+        )
+        got = [forces.vertical_load[k], forces.motion_resistance[k], forces.thrust[k]]
+        np.testing.assert_allclose(got, exp[:3], rtol=1e-7, atol=1e-7 * exp[0])

@@ -97,7 +97,7 @@ def test_module_length():
 def _contributing_linear_soil():
     """The `LinearSoil` of CONTRIBUTING's recipe, executed as written there."""
     text = (PKG.parent / "CONTRIBUTING.md").read_text()
-    recipe = text[text.index("### Adding a terrain law or a stress distribution") :]
+    recipe = text[text.index("### Adding a terrain law, a stress distribution or a shear law") :]
     code = recipe[recipe.index("```python\n") + len("```python\n") : recipe.index("```\n\n")]
     namespace: dict = {}
     exec(compile(code, "CONTRIBUTING.md", "exec"), namespace)

@@ -482,3 +482,35 @@ def test_float32_general_path_has_no_nan():
     both = (np.asarray(st.status) == 0) & (np.asarray(st64.status) == 0)
     assert both.sum() > 40
     assert np.max(np.abs(np.asarray(st.sinkage)[both] / np.asarray(st64.sinkage)[both] - 1)) < 1e-3
+
+
+@pytest.mark.parametrize("theta0, clearance_fraction", [(0.1, 0.9), (0.5, 0.3), (0.9, 0.0)])
+def test_wong_front_rim_integrals_match_adaptive_quadrature(theta0, clearance_fraction):
+    """The closed forms `WongSnow.front_rim_integrals` (the solver's start and the
+    singularity subtraction) against SciPy's quad of the law at the rim sinkage: a wheel
+    high above the base, a deep one, and one resting on the base (log singularity)."""
+    from scipy import integrate
+
+    d, p_w = 0.7, 3e4
+    # The base at z_w places the lowest rim point `clearance` above it.
+    z0 = d * math.sin(theta0 / 2) ** 2
+    snow = sj.WongSnow(p_w, z0 / (1 - clearance_fraction), 1e3, 0.3, 0.02)
+    clearance = float(snow.z_w) - z0
+
+    def sigma(theta):  # Wong's law at the rim point's height above the base
+        return -p_w * math.log((clearance + d * math.sin(theta / 2) ** 2) / float(snow.z_w))
+
+    points = [1e-12] if clearance_fraction == 0 else None
+    expected = [
+        integrate.quad(
+            lambda t, h=h: sigma(t) * h(t), 0, theta0, points=points, epsabs=0, epsrel=1e-12
+        )[0]
+        for h in (math.cos, math.sin)
+    ]
+    cos_int, sin_int = snow.front_rim_integrals(theta0, d, clearance)
+    np.testing.assert_allclose([cos_int, sin_int], expected, rtol=1e-9)
+    # The stress at a height above the base: Wong's law at depth - height.
+    height = np.array([0.3, 0.05, 1e-6]) * float(snow.z_w)
+    np.testing.assert_allclose(
+        snow.pressure_at_clearance(height), snow.pressure(snow.z_w - height), rtol=1e-9
+    )

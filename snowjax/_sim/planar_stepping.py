@@ -28,7 +28,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
 from .planar import (
     NUM_WHEELS,
     PlanarTrajectory,
@@ -296,12 +296,13 @@ def simulate_planar(
     snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
-    shear = _shear_name(shear)
-    if shear == "simplified":
+    law = _shear_law(shear)
+    if not law.lateral:
         raise ValueError(
-            "shear='simplified' (eq. 4.13) has no lateral counterpart: use shear='classic' "
-            "(or 'none') with simulate_planar."
+            f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
+            "shear='classic' (or 'none') with simulate_planar."
         )
+    shear = _shear_name(law)
     if not isinstance(vehicle, PlanarVehicle):
         raise TypeError(f"vehicle must be a PlanarVehicle, got {type(vehicle).__name__}")
     if lateral is None:

@@ -94,7 +94,7 @@ from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.inputs import _validate_eagerly
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -238,11 +238,12 @@ def _check_dynamic_shear(shear, where: str) -> None:
     positive over the whole contact of a braked wheel at a large entry angle, so the snow
     pushes the braked wheel forward (`tests/test_properties.py` keeps such a case).
     """
-    if _shear_name(shear) == "simplified":
+    law = _shear_law(shear)
+    if not law.in_simulations:
         raise ValueError(
-            f"shear='simplified' (eq. 4.13) is refused by {where}: its braking extension can"
-            " push a braked wheel forward (it delivers power on snow with cohesion >> p_w);"
-            " use shear='classic' (or 'none')."
+            f"shear={law.name!r} ({type(law).__name__}) is refused by {where}: its braking "
+            "extension can push a braked wheel forward (it delivers power on snow with "
+            "cohesion >> p_w); use shear='classic' (or 'none')."
         )
 
 

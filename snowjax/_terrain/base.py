@@ -57,6 +57,12 @@ class AbstractTerrain(eqx.Module):
     - `breakpoint_sinkages()`: sinkages [m] at which the law has a kink or a jump
       (default none; `LayeredSnow`'s ice failure), where the contact quadrature cuts its
       panels;
+    - `front_rim_integrals(entry_angle, diameter, clearance)` and
+      `pressure_at_clearance(clearance, width)`: closed forms a law can offer for the
+      front region of the rim (default none; `WongSnow`'s).  With them the solver
+      starts from the closed-form load balance without shear and subtracts the
+      singularity of the normal stress at the axle of a wheel on the base (the
+      closed-form rule of `snowjax._wheel.contact`);
     - `reference()` (abstract class method): a valid parameter set of the kind, which
       stands in for invalid batch elements.
     """
@@ -91,6 +97,28 @@ class AbstractTerrain(eqx.Module):
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """Sinkages [m] where the pressure–sinkage law has a kink or a jump (none)."""
         return ()
+
+    def front_rim_integrals(
+        self,
+        entry_angle: Float[ArrayLike, "..."],
+        diameter: Float[ArrayLike, "..."],
+        clearance: Float[ArrayLike, "..."],
+    ) -> tuple[Array, Array] | None:
+        """Closed forms of `int_0^theta0 sigma cos(theta) dtheta` and
+        `int_0^theta0 sigma sin(theta) dtheta` [Pa] for the normal stress sigma on the front
+        region of a rim of diameter D [m] at entry angle theta0 [rad] whose lowest point
+        lies `clearance` [m] above the base; None (the default) if the law offers none.
+        A law that offers them also overrides `pressure_at_clearance`.
+        """
+        return None
+
+    def pressure_at_clearance(
+        self, clearance: Float[ArrayLike, "..."], width: Float[ArrayLike, "..."]
+    ) -> Float[Array, "..."]:
+        """Normal stress sigma [Pa] at `clearance` [m] above the base, under a contact of
+        width b [m]: `pressure(depth - clearance)` by default; a law with a singularity
+        at the base writes it without the cancellation of depth - clearance."""
+        return self.pressure(self.depth - clearance, width)
 
     def constraints(self, shear: str = "classic") -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range).

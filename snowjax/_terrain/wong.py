@@ -69,6 +69,12 @@ def wong_pressure(
     return jnp.where(below, -jnp.asarray(p_w) * jnp.log1p(-safe), jnp.inf)
 
 
+def _safe_sqrt(x):
+    """sqrt(x) for x > 0, 0 elsewhere (finite gradient)."""
+    positive = x > 0
+    return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
+
+
 class WongSnow(AbstractTerrain):
     """Shallow snow described by Wong's pressure–sinkage law and Mohr–Coulomb shear.
 
@@ -111,6 +117,34 @@ class WongSnow(AbstractTerrain):
     def depth(self) -> Array:
         """z_w: the asymptotic sinkage, the depth of the ice layer or frozen base [m]."""
         return self.z_w
+
+    def pressure_at_clearance(self, clearance, width=None):
+        """Wong's law at `clearance` = z_w - z [m] above the base, `-p_w ln(clearance /
+        z_w)` [Pa] (no cancellation near the base); `+inf` on the base."""
+        return -self.p_w * jnp.log(clearance / self.z_w)
+
+    def front_rim_integrals(self, entry_angle, diameter, clearance):
+        """Exact `int_0^theta0 sigma cos` and `int_0^theta0 sigma sin` [Pa] on the rim.
+
+        On the rim, sigma = -p_w ln Z with Z = Z0 + 2 a sin^2(theta / 2) = A - a cos
+        theta, Z0 = clearance / z_w, a = D / (2 z_w), A = Z0 + a.  Integration by parts
+        (Z(theta0) = 1) gives `int sigma cos = p_w a int_0^theta0 sin^2 / Z`, and
+        `int sin^2/(A - a cos) = sin/a + A theta/a^2 - 2 sqrt(A^2 - a^2)/a^2
+        atan(sqrt((A + a)/(A - a)) tan(theta/2))`; `int sigma sin = (p_w / a)(1 - Z0 +
+        Z0 ln Z0)`.  Both are finite as Z0 -> 0 (the wheel on the base).
+        """
+        z0_rel = clearance / self.z_w
+        a = diameter / (2 * self.z_w)
+        sq_z0 = _safe_sqrt(z0_rel)
+        sq_2a = jnp.sqrt(z0_rel + 2 * a)
+        big_a = z0_rel + a
+        angle = jnp.arctan2(sq_2a * jnp.tan(entry_angle / 2), sq_z0)
+        cos_integral = self.p_w * (
+            jnp.sin(entry_angle) + big_a * entry_angle / a - 2 * sq_z0 * sq_2a / a * angle
+        )
+        positive = z0_rel > 0
+        xlogx = jnp.where(positive, z0_rel * jnp.log(jnp.where(positive, z0_rel, 1.0)), 0.0)
+        return cos_integral, self.p_w / a * (1 - z0_rel + xlogx)
 
     def constraints(self, shear: str = "classic"):
         rules = AbstractTerrain.constraints(self, shear)

@@ -11,14 +11,12 @@ of the mirrored front angle.
 """
 
 import abc
-from typing import TypeGuard
 
 import equinox as eqx
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float
 
 from .._leaves import _as_float, _check_real_leaves, parameter
-from .._terrain.wong import WongSnow
 
 __all__ = ["AbstractStressDistribution", "FrontRegion", "WongReece"]
 
@@ -99,11 +97,6 @@ _FRONT_REGION = FrontRegion()
 def _is_front(distribution) -> bool:
     """Whether the distribution is the thesis's front region (`None` or `FrontRegion()`)."""
     return distribution is None or isinstance(distribution, FrontRegion)
-
-
-def _is_thesis_path(terrain, distribution) -> TypeGuard[WongSnow]:
-    """WongSnow with the front-region distribution: the thesis's specialised quadrature."""
-    return _is_front(distribution) and isinstance(terrain, WongSnow)
 
 
 def _as_distribution(distribution) -> AbstractStressDistribution:

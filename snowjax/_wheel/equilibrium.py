@@ -3,9 +3,10 @@
 `solve_wheel` finds the entry angle theta0 at which the vertical resultant of the rim
 stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton
 kept inside a bracket, `BracketedNewton`): one solver (`_solve_layout`) for every
-terrain, stress distribution, shear law and slip angle, whose start is Wong snow's
-closed-form no-shear balance where it applies (`_closed_form_start`) and a scan of W
-otherwise (`_scan_start`).
+terrain, stress distribution, shear law and slip angle, whose start is the closed-form
+no-shear balance where the terrain offers closed forms of its rim integrals
+(`_closed_form_start`: `WongSnow` on the front region) and a scan of W otherwise
+(`_scan_start`).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
@@ -40,13 +41,13 @@ from .bracketed import solve_elementwise
 from .contact import (
     ShearModel,
     _broadcast_leaves,
+    _clearance,
+    _closed_form_rule,
     _contact_batch,
     _layout,
-    _nodes_for,
-    _sigma_cos_integral,
     _with_rule_for,
 )
-from .distribution import AbstractStressDistribution, _as_distribution, _is_thesis_path
+from .distribution import AbstractStressDistribution, _as_distribution
 from .geometry import RigidWheel, max_sinkage
 from .inputs import (
     _broadcast_shape,
@@ -62,7 +63,7 @@ from .inputs import (
 from .lateral import Lateral
 from .model import ContactModel, _unpack_model
 from .root import _implicit_root, _root_outputs
-from .shear_law import AbstractShearLaw, _shear_name
+from .shear_law import AbstractShearLaw, _shear_law
 from .status import Status, _throw_on_failure
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
@@ -149,32 +150,32 @@ def _newton_s(residual, s, steps):
     return jax.lax.fori_loop(0, steps, step, s)
 
 
-def _no_shear_load(theta0, diameter, width, snow):
-    """W without shear stress on Wong snow's front region, in closed form [N]:
-    r b int_0^theta0 sigma cos(theta) dtheta (`_sigma_cos_integral`)."""
-    a = diameter / (2 * snow.z_w)
-    z0_rel = jnp.maximum(1 - max_sinkage(theta0, diameter) / snow.z_w, 0.0)
-    return diameter / 2 * width * _sigma_cos_integral(theta0, z0_rel, a, snow.p_w)
+def _no_shear_load(theta0, diameter, width, terrain):
+    """W without shear stress on the front region, in closed form [N]:
+    r b int_0^theta0 sigma cos(theta) dtheta (`AbstractTerrain.front_rim_integrals`)."""
+    clearance = _clearance(theta0, diameter, terrain)
+    return diameter / 2 * width * terrain.front_rim_integrals(theta0, diameter, clearance)[0]
 
 
-def _initial_guess(theta_cap, load, diameter, width, snow):
+def _initial_guess(theta_cap, load, diameter, width, terrain):
     """Solver start s0 from the no-shear load balance, using its closed form.
 
-    Starting from the small-angle law W ~ r b p_w a theta0^3 / 3, three Newton steps on
-    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`) refine the guess; the shear
-    stress adds to W for a driven wheel, so the true theta0 is a little lower.
+    The closed-form W on the scan grid (`_scan_grid`) brackets the load, and ln W
+    interpolated linearly in s^2 inside the bracket (`_grid_start`; exact for a power
+    law, W ~ theta0^3 for shallow sinkage) starts three Newton steps on
+    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`); the shear stress adds to W for a
+    driven wheel, so the true theta0 is a little lower.
     """
-    a = diameter / (2 * snow.z_w)
-    rb = diameter / 2 * width
-    theta = jnp.cbrt(3 * load / (rb * snow.p_w * a))
-    s_min = _s_min(theta.dtype)
-    s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
+    s_grid = _scan_grid(terrain, load.dtype)
+    no_shear = lambda theta0: _no_shear_load(theta0, diameter, width, terrain)  # noqa: E731
+    over, _, _, _, s = _grid_start(no_shear, s_grid, theta_cap, load)
+    s = jnp.where(over, s_grid[0], s)  # beyond the closed-form capacity: the deepest start
 
     def residual(s):
-        w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, snow)
+        w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, terrain)
         return _balance_residual(w, load)
 
-    return jax.lax.stop_gradient(_newton_s(residual, jnp.maximum(s, s_min), 3))
+    return jax.lax.stop_gradient(_newton_s(residual, s, 3))
 
 
 def _warm_start(guess, theta_cap):
@@ -210,7 +211,8 @@ def _entry_angle_cap(depth, diameter):
 
 
 def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shear):
-    """(over, target, lower, upper, s0) from Wong snow's closed-form no-shear load.
+    """(over, target, lower, upper, s0) from the closed-form no-shear load (a terrain
+    with `front_rim_integrals` on the front region).
 
     The capacity of the layer is W at s_min.  For slip >= 0 the shear stress only adds to
     W, so loads below the closed-form no-shear capacity are known to be carried and the
@@ -237,7 +239,7 @@ def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shea
         s0 = _warm_start(guess, theta_cap)
     else:
         s0 = _initial_guess(theta_cap, target, diameter, width, snow)
-        if shear != "none":
+        if shear.mobilises:
             theta_g = _theta_from_s(s0, theta_cap)
             w_ns = _no_shear_load(theta_g, diameter, width, snow)
             factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
@@ -283,7 +285,15 @@ def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
         over = w_top < load
         target = jnp.where(over, 0.5 * w_top, load)
         return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
-    s_grid = _scan_grid(terrain, dtype)
+    return _grid_start(vertical, _scan_grid(terrain, dtype), theta_cap, load)
+
+
+def _grid_start(vertical, s_grid, theta_cap, load):
+    """(over, target, lower, upper, s0) from W = `vertical(theta0)` on the grid `s_grid`
+    (shape (K,)) of the solver variable: the shallowest grid interval where W crosses
+    the load brackets the root, and ln W interpolated linearly in s^2 inside it gives
+    s0.  A load no grid point carries is `over`; its target is half the capacity
+    W(s_grid[0])."""
     points = s_grid.shape[0]
     w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
         jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
@@ -313,10 +323,11 @@ def _solve_layout(
     """Equilibrium of a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
     Every terrain, distribution, shear law and slip angle: the contact integrals come from
-    `_contact_batch` (Wong snow's accelerated rule or the any-terrain rule), the start
-    from `_closed_form_start` (Wong snow on the front region, straight running) or
-    `_scan_start`.  The batch is one `optx.root_find` (`BracketedNewton`: Newton kept
-    inside a bracket, bisecting where a step would leave it) with a diagonal Jacobian
+    `_contact_batch` (the closed-form rule or the any-terrain rule), the start from
+    `_closed_form_start` (a terrain with closed-form rim integrals on the front region,
+    straight running) or `_scan_start`.  The batch is one `optx.root_find`
+    (`BracketedNewton`: Newton kept inside a bracket, bisecting where a step would leave
+    it) with a diagonal Jacobian
     (the elements are independent), so a Newton step is one tangent evaluation.  Every
     element's root lies in [lower, upper]: W > target at the deep end, W < target at the
     shallow one; W need not be monotone in between (a braked wheel's backward shear pulls
@@ -325,7 +336,7 @@ def _solve_layout(
     `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`).
     Returns (theta0, R, T, M, F_y, M_z, status).
     """
-    shear, n, max_steps, thesis = options
+    shear, n, max_steps, closed_form = options
     # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
     # the solve runs on stopped copies of the inputs.
     differentiable = (wheel, terrain, distribution, load, slip, side)
@@ -333,7 +344,12 @@ def _solve_layout(
     tol = _tolerance(load.dtype)
     theta_cap, reaches_base = _entry_angle_cap(terrain.depth, wheel.diameter)
     contact = functools.partial(
-        _contact_batch, shear=shear, n=n, braking=braking, thesis=thesis, bulldozing=bulldozing
+        _contact_batch,
+        shear=shear,
+        n=n,
+        braking=braking,
+        closed_form=closed_form,
+        bulldozing=bulldozing,
     )
 
     def vertical(theta0) -> Array:  # W of every element
@@ -341,7 +357,7 @@ def _solve_layout(
             Array, contact(theta0, slip, wheel, terrain, distribution, side, vertical_only=True)
         )
 
-    start = _closed_form_start if thesis else _scan_start
+    start = _closed_form_start if closed_form else _scan_start
     over, target, lower, upper, s0 = start(
         vertical, theta_cap, load, slip, guess, wheel, terrain, shear
     )
@@ -462,21 +478,21 @@ def _solve_jit(
 ):
     """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
 
-    `options` = (shear, nodes, max_steps, thesis), static; `layout` "driving",
+    `options` = (shear law, nodes, max_steps, closed_form), static; `layout` "driving",
     "braking" or "auto" (`_with_rule_for`).
     """
-    shear, n, max_steps, thesis = options
+    shear, n, max_steps, closed_form = options
     trees = (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
     shape, dtype, trees = _broadcast_leaves(*trees)
     wheel, terrain, distribution, load, slip, guess, slip_angle, lateral = trees
-    valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
+    valid = _valid_mask(wheel, terrain, distribution, load, slip, shear.name)
     small, large = _magnitude_window(dtype)
     for name, value, ok, _ in _side_rules(slip_angle, lateral):
         valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
     wheel, terrain, distribution, load, slip = _safe_inputs(
         valid, wheel, terrain, distribution, load, slip
     )
-    if thesis:
+    if closed_form:
         slip = _flush_tiny_slip(slip)
     side, bulldozing = _side(valid, slip_angle, lateral)
 
@@ -484,7 +500,7 @@ def _solve_jit(
         def layout_solve(braking):
             return _solve_layout(
                 *ops,
-                options=(shear, n[braking], max_steps, thesis),
+                options=(shear, n[braking], max_steps, closed_form),
                 braking=braking,
                 bulldozing=bulldozing,
             )
@@ -626,7 +642,7 @@ def solve_wheel(
     terrain, shear, distribution, lateral, nodes_per_panel = _unpack_model(
         terrain, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
-    shear = _shear_name(shear)
+    shear = _shear_law(shear)
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
     _check_model(wheel, terrain, distribution, shear)
@@ -652,10 +668,10 @@ def solve_wheel(
         lateral = None  # used only with a slip angle
     else:
         lateral = Lateral() if lateral is None else lateral
-        if shear == "simplified":
+        if not shear.lateral:
             raise ValueError(
-                "shear='simplified' (eq. 4.13) has no lateral counterpart: use "
-                "shear='classic' (or 'none') with a slip_angle."
+                f"shear={shear.name!r} ({type(shear).__name__}) has no lateral counterpart: "
+                "use shear='classic' (or 'none') with a slip_angle."
             )
     side_trees = (slip_angle, lateral)  # both None without a slip angle
     shape = _broadcast_shape(
@@ -667,15 +683,16 @@ def solve_wheel(
         return WheelState(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
-    _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
+    _validate_eagerly(wheel, terrain, distribution, load, slip, shear.name)
     if slip_angle is not None:
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
         side_rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
         _check_rules(side_rules, dtype, *_magnitude_window(dtype))
-    thesis = slip_angle is None and _is_thesis_path(terrain, distribution)
-    options = (shear, _nodes_for(shear, nodes_per_panel, thesis), int(max_steps), thesis)
-    layout = _layout(slip, warm_start=thesis and initial_entry_angle is not None)
+    closed_form = slip_angle is None and _closed_form_rule(terrain, distribution)
+    nodes = type(shear).nodes(shear, nodes_per_panel, closed_form)  # unbound: see inputs
+    options = (shear, nodes, int(max_steps), closed_form)
+    layout = _layout(slip, warm_start=closed_form and initial_entry_angle is not None)
     state = _solve_jit(
         wheel,
         terrain,

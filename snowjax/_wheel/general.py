@@ -2,13 +2,14 @@
 the quadrature's node maps and the search for the braking sign change.
 
 `general_contact` is the rule the contact entry (`contact._contact_batch`) takes for
-every combination except `WongSnow` on the front region running straight, for which
-Wong snow's accelerated rule (`contact._contact_scalar`) is used; both rules build their
-nodes from the maps here (`_power_map`, `_sinh_offsets`) and find the braking sign change
-with `_shear_sign_change`.
+every combination except a law with closed-form rim integrals (`WongSnow`) on the front
+region running straight, which takes the closed-form rule
+(`contact._closed_form_contact`); both rules build their nodes from the maps here
+(`_power_map`, `_sinh_offsets`) and find the braking sign change with
+`_shear_sign_change`.
 
 The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
-sinkage, shear stress by Janosi–Hanamoto from the shear displacement 4.10) are
+sinkage, shear stress by the shear law from the shear displacement 4.10) are
 integrated over theta_r <= theta <= theta0 (0 <= theta <= theta0 without a
 distribution) by composite Gauss–Legendre quadrature.  The interval is cut at every
 angle where an integrand has a kink or a jump: theta_m (peak of the Wong–Reece
@@ -36,18 +37,14 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
-from .._terrain.shear import _signed_mobilisation
 from .geometry import (
     _rim_sinkage_between,
     _shear_displacement,
     _shear_displacement_slope,
     _sincos_half,
 )
-from .lateral import bulldozing_pressure, combined_mobilisation
+from .lateral import bulldozing_pressure
 
-# Gauss–Legendre nodes per half-panel (batches without braking, with braking); see the
-# README for the measured accuracy.
-DEFAULT_GENERAL_NODES = {"classic": (12, 16), "none": (12, 12)}
 GRADING_POWER = 2
 
 
@@ -182,7 +179,7 @@ def general_contact(
     width,
     terrain,
     distribution,
-    shear,
+    law,
     n,
     braking=True,
     vertical_only=False,
@@ -192,8 +189,10 @@ def general_contact(
     """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
 
     `distribution` is an `AbstractStressDistribution` (`FrontRegion`: 0..theta0;
-    `WongReece`: theta_r..theta0 with the mirrored rear stresses).  `braking=False` is valid only
-    for slip >= 0 (no sign change of the shear displacement).
+    `WongReece`: theta_r..theta0 with the mirrored rear stresses), `law` the shear law
+    (`AbstractShearLaw`: its mobilisation and the width of its layer at the entry).
+    `braking=False` is valid only for slip >= 0 (no sign change of the shear
+    displacement).
 
     `side` is None (straight running) or `(tan(beta), K_y, gamma)` of a wheel under slip
     angle beta (`lateral.py`; K_y None: the terrain's modulus); then the shear stress is
@@ -209,19 +208,19 @@ def general_contact(
     _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
     entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
     if side is None:
-        entry_scale = _layer_width(k_surface, r, entry_slope)
+        entry_scale = law.entry_layer(theta0, slip, diameter, terrain, k_surface)
+    elif not law.mobilises:
+        entry_scale = inf
     else:
         # Width of the layer where the resultant displacement u rises to ~1.
         tan_beta, k_lateral, unit_weight = side
         k_y = k_surface if k_lateral is None else k_lateral
         rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
         entry_scale = 1 / (r * jnp.maximum(rate, 1e-12 / k_surface))
-    if shear == "none":
-        entry_scale = inf
 
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
-    if braking and shear != "none":
+    if braking and law.mobilises:
         split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
         split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
         z_split = _rim_sinkage_between(
@@ -253,7 +252,7 @@ def general_contact(
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
     tau_y = None
-    if shear == "none":
+    if not law.mobilises:
         tau = jnp.zeros_like(sigma)
         if side is not None:
             tau_y = jnp.zeros_like(sigma)
@@ -261,11 +260,11 @@ def general_contact(
         j = _shear_displacement(theta, theta0, slip, r, sin)
         strength = cohesion + sigma * tan_phi
         if side is None:
-            tau = strength * _signed_mobilisation(j / modulus)
+            tau = strength * law.mobilisation(j, modulus, sigma, theta0, slip, diameter, terrain)
         else:
             j_y = r * (1 - slip) * (theta0 - theta) * tan_beta
             k_y = modulus if k_lateral is None else k_lateral
-            share_x, share_y = combined_mobilisation(j / modulus, j_y / k_y)
+            share_x, share_y = law.combined_mobilisation(j / modulus, j_y / k_y)
             tau, tau_y = strength * share_x, strength * share_y
 
     rb = r * width
