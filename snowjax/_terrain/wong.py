@@ -121,7 +121,9 @@ class WongSnow(AbstractTerrain):
     def pressure_at_clearance(self, clearance, width=None):
         """Wong's law at `clearance` = z_w - z [m] above the base, `-p_w ln(clearance /
         z_w)` [Pa] (no cancellation near the base); `+inf` on the base."""
-        return -self.p_w * jnp.log(clearance / self.z_w)
+        # One reciprocal per parameter set, a product per point (a quadrature calls this
+        # at every node).
+        return -self.p_w * jnp.log(clearance * (1 / self.z_w))
 
     def front_rim_integrals(self, entry_angle, diameter, clearance):
         """Exact `int_0^theta0 sigma cos` and `int_0^theta0 sigma sin` [Pa] on the rim.

@@ -160,22 +160,23 @@ def _no_shear_load(theta0, diameter, width, terrain):
 def _initial_guess(theta_cap, load, diameter, width, terrain):
     """Solver start s0 from the no-shear load balance, using its closed form.
 
-    The closed-form W on the scan grid (`_scan_grid`) brackets the load, and ln W
-    interpolated linearly in s^2 inside the bracket (`_grid_start`; exact for a power
-    law, W ~ theta0^3 for shallow sinkage) starts three Newton steps on
-    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`); the shear stress adds to W for a
-    driven wheel, so the true theta0 is a little lower.
+    Starting from the small-angle law W ~ r b (r k) theta0^3 / 3, k = dsigma/dz at the
+    surface (Wong's law: k = p_w / z_w), three Newton steps on
+    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`) refine the guess; the shear
+    stress adds to W for a driven wheel, so the true theta0 is a little lower.
     """
-    s_grid = _scan_grid(terrain, load.dtype)
-    no_shear = lambda theta0: _no_shear_load(theta0, diameter, width, terrain)  # noqa: E731
-    over, _, _, _, s = _grid_start(no_shear, s_grid, theta_cap, load)
-    s = jnp.where(over, s_grid[0], s)  # beyond the closed-form capacity: the deepest start
+    r = diameter / 2
+    zero = jnp.zeros_like(load)
+    stiffness = jax.jvp(lambda z: terrain.pressure(z, width), (zero,), (jnp.ones_like(load),))[1]
+    theta = jnp.cbrt(3 * load / (r * width * r * stiffness))
+    s_min = _s_min(theta.dtype)
+    s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
 
     def residual(s):
         w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, terrain)
         return _balance_residual(w, load)
 
-    return jax.lax.stop_gradient(_newton_s(residual, s, 3))
+    return jax.lax.stop_gradient(_newton_s(residual, jnp.clip(s, s_min, S_MAX), 3))
 
 
 def _warm_start(guess, theta_cap):
@@ -285,15 +286,7 @@ def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
         over = w_top < load
         target = jnp.where(over, 0.5 * w_top, load)
         return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
-    return _grid_start(vertical, _scan_grid(terrain, dtype), theta_cap, load)
-
-
-def _grid_start(vertical, s_grid, theta_cap, load):
-    """(over, target, lower, upper, s0) from W = `vertical(theta0)` on the grid `s_grid`
-    (shape (K,)) of the solver variable: the shallowest grid interval where W crosses
-    the load brackets the root, and ln W interpolated linearly in s^2 inside it gives
-    s0.  A load no grid point carries is `over`; its target is half the capacity
-    W(s_grid[0])."""
+    s_grid = _scan_grid(terrain, dtype)
     points = s_grid.shape[0]
     w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
         jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
@@ -327,8 +320,8 @@ def _solve_layout(
     `_closed_form_start` (a terrain with closed-form rim integrals on the front region,
     straight running) or `_scan_start`.  The batch is one `optx.root_find`
     (`BracketedNewton`: Newton kept inside a bracket, bisecting where a step would leave
-    it) with a diagonal Jacobian
-    (the elements are independent), so a Newton step is one tangent evaluation.  Every
+    it) with a diagonal Jacobian (the elements are independent), so a Newton step is one
+    tangent evaluation.  Every
     element's root lies in [lower, upper]: W > target at the deep end, W < target at the
     shallow one; W need not be monotone in between (a braked wheel's backward shear pulls
     it down; a layered snow's crust breaks).
