@@ -108,7 +108,8 @@ class AbstractTerrain(eqx.Module):
         `int_0^theta0 sigma sin(theta) dtheta` [Pa] for the normal stress sigma on the front
         region of a rim of diameter D [m] at entry angle theta0 [rad] whose lowest point
         lies `clearance` [m] above the base; None (the default) if the law offers none.
-        A law that offers them also overrides `pressure_at_clearance`.
+        A law that offers them has a base at a finite `depth` and also overrides
+        `pressure_at_clearance`.
         """
         return None
 
