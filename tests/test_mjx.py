@@ -231,6 +231,9 @@ def test_traced_bad_prescribed_loads_are_flagged(vehicle):
     assert np.all(np.isfinite(np.asarray(out.longitudinal_force)))
 
 
+# The longest test of `make test` (51 s of a worker on 2 cores, 43 s of it compiling the
+# vmapped forward-mode rollout in the notebook's kernel): `make test-all` runs it.
+@pytest.mark.slow
 def test_notebook_runs(tmp_path):
     nb = run_notebook("mjx_vehicle.ipynb", tmp_path)
     text = outputs_text(nb)

@@ -343,6 +343,9 @@ def test_bad_input_raises(kwargs, match):
         sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, SNOW, "simplified")
 
 
+# 45 s of a worker on 2 cores, compiling the forward-mode Jacobians of the notebook's
+# least-squares fits in its kernel: `make test-all` runs it.
+@pytest.mark.slow
 def test_notebook_runs(tmp_path):
     nb = run_notebook("vehicle_simulation.ipynb", tmp_path)
     text = outputs_text(nb)
