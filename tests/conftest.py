@@ -43,12 +43,10 @@ jax.config.update("jax_enable_x64", True)
 # time as a worker frees up; alphabetical order left a long file (test_wheel.py) for the
 # end and one worker idle meanwhile (958 worker-seconds in 508 s of wall time).  The
 # longest files go first (longest-processing-time-first scheduling), by their summed
-# test durations on 2 cores (2026-11-26, seconds, with the two notebooks now marked
-# `slow`): properties 190, mjx 137, sim 125, terrains 87, lateral 64, wheel 64, planar
-# 56, single_wheel 48, reproduce 38.  A file missing from the list keeps its place after
-# them.  The order also decides which files share a worker, and with it the compiled
-# programs they reuse: with mjx and sim after terrains the suite took a minute more of
-# CPU time (two fresh clones, 17 min 0 s and 17 min 20 s of user time against 15 min 53 s).
+# test durations on 2 cores (2026-11-26, seconds, without the `slow` cases): properties
+# 190, mjx 86, sim 80, terrains 87, lateral 64, wheel 64, planar 56, single_wheel 48,
+# reproduce 38.  A file missing from the list keeps its place after them.  The order
+# also decides which files share a worker, and with them the compiled programs reused.
 _LONGEST_FIRST = (
     "test_properties.py",
     "test_mjx.py",
