@@ -8,8 +8,7 @@ API only (`snowjax.AbstractTerrain`, `snowjax.AbstractStressDistribution`,
 against the independent SciPy reference of `tests/reference_terrain.py`), `jax.grad`
 (against central differences), `fit_wheel` and `sweep`, with no other edit anywhere:
 the recipe of CONTRIBUTING's "Adding a terrain law, a stress distribution or a shear
-law".  A
-shear law (`KondnerShear`) likewise, through both contact rules.
+law".  A shear law (`KondnerShear`) likewise, through both contact rules.
 """
 
 from __future__ import annotations

@@ -487,8 +487,8 @@ def test_float32_general_path_has_no_nan():
 @pytest.mark.parametrize("theta0, clearance_fraction", [(0.1, 0.9), (0.5, 0.3), (0.9, 0.0)])
 def test_wong_front_rim_integrals_match_adaptive_quadrature(theta0, clearance_fraction):
     """The closed forms `WongSnow.front_rim_integrals` (the solver's start and the
-    singularity subtraction) against SciPy's quad of the law at the rim sinkage: a wheel
-    high above the base, a deep one, and one resting on the base (log singularity)."""
+    singularity subtraction) against SciPy's quad of Wong's law on the rim: a wheel high
+    above the base, a deep one, and one resting on the base (log singularity)."""
     from scipy import integrate
 
     d, p_w = 0.7, 3e4
