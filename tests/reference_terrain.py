@@ -122,33 +122,18 @@ def contact(
     return np.array([w * r * b, rr * r * b, t * r * b, m * r * r * b])
 
 
-def solve(
-    load,
-    slip,
-    D,
-    b,
-    law,
-    c,
-    tan_phi,
-    K,
-    fm=0.0,
-    fr=0.0,
-    shear="classic",
-    z_f=None,
-    depth=math.inf,
-    shallowest=False,
-    lower=None,
-    mobilisation=None,
-):
+def solve(load, slip, D, b, law, c, tan_phi, K, *args, depth=math.inf, shallowest=False, **kw):
     """theta0 with W(theta0) = load by brentq (the shallowest root if `shallowest`).
 
-    theta0 is searched up to 85 degrees, or up to the base at `depth` [m] if shallower.
+    theta0 is searched up to 85 degrees, or up to the base at `depth` [m] if shallower;
+    `args` and `kw` are the rest of `contact`'s arguments (fm, fr, shear, z_f, lower,
+    mobilisation).
     """
     theta_max = math.radians(85.0)
     if 2 * depth / D < 2:
         theta_max = min(theta_max, math.acos(1 - 2 * depth / D))
-    args = (D, b, law, c, tan_phi, K, fm, fr, shear, z_f, lower, mobilisation)
-    W = lambda th: contact(th, slip, *args)[0] - load  # noqa: E731
+    args = (D, b, law, c, tan_phi, K, *args)
+    W = lambda th: contact(th, slip, *args, **kw)[0] - load  # noqa: E731
     lo, hi = 1e-4, theta_max * (1 - 1e-12)
     if shallowest:
         grid = np.linspace(lo, hi, 1000)
@@ -156,4 +141,4 @@ def solve(
         k = next(i for i, v in enumerate(vals) if v >= 0)
         lo, hi = grid[k - 1], grid[k]
     theta0 = optimize.brentq(W, lo, hi, xtol=1e-15, rtol=1e-14)
-    return theta0, contact(theta0, slip, *args)
+    return theta0, contact(theta0, slip, *args, **kw)

@@ -157,17 +157,21 @@ def _no_shear_load(theta0, diameter, width, terrain):
     return diameter / 2 * width * terrain.front_rim_integrals(theta0, diameter, clearance)[0]
 
 
-def _initial_guess(theta_cap, load, diameter, width, terrain):
+def _surface_stiffness(terrain, width, like):
+    """k = dsigma/dz [Pa/m] of the law at the surface (Wong's law: p_w / z_w)."""
+    zero, one = jnp.zeros_like(like), jnp.ones_like(like)
+    return jax.jvp(lambda z: terrain.pressure(z, width), (zero,), (one,))[1]
+
+
+def _initial_guess(theta_cap, load, diameter, width, terrain, stiffness):
     """Solver start s0 from the no-shear load balance, using its closed form.
 
-    Starting from the small-angle law W ~ r b (r k) theta0^3 / 3, k = dsigma/dz at the
-    surface (Wong's law: k = p_w / z_w), three Newton steps on
-    `ln(W_no_shear(theta0) / F_z)` (`_no_shear_load`) refine the guess; the shear
-    stress adds to W for a driven wheel, so the true theta0 is a little lower.
+    Starting from the small-angle law W ~ r b (r k) theta0^3 / 3, k = `stiffness`
+    (`_surface_stiffness`), three Newton steps on `ln(W_no_shear(theta0) / F_z)`
+    (`_no_shear_load`) refine the guess; the shear stress adds to W for a driven wheel,
+    so the true theta0 is a little lower.
     """
     r = diameter / 2
-    zero = jnp.zeros_like(load)
-    stiffness = jax.jvp(lambda z: terrain.pressure(z, width), (zero,), (jnp.ones_like(load),))[1]
     theta = jnp.cbrt(3 * load / (r * width * r * stiffness))
     s_min = _s_min(theta.dtype)
     s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
@@ -239,13 +243,14 @@ def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shea
     if guess is not None:
         s0 = _warm_start(guess, theta_cap)
     else:
-        s0 = _initial_guess(theta_cap, target, diameter, width, snow)
+        stiffness = _surface_stiffness(snow, width, load)
+        s0 = _initial_guess(theta_cap, target, diameter, width, snow, stiffness)
         if shear.mobilises:
             theta_g = _theta_from_s(s0, theta_cap)
             w_ns = _no_shear_load(theta_g, diameter, width, snow)
             factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
             factor = jax.lax.stop_gradient(factor)
-            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow)
+            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow, stiffness)
     return over, target, s_min, jnp.full_like(load, S_MAX), s0
 
 
@@ -321,10 +326,9 @@ def _solve_layout(
     straight running) or `_scan_start`.  The batch is one `optx.root_find`
     (`BracketedNewton`: Newton kept inside a bracket, bisecting where a step would leave
     it) with a diagonal Jacobian (the elements are independent), so a Newton step is one
-    tangent evaluation.  Every
-    element's root lies in [lower, upper]: W > target at the deep end, W < target at the
-    shallow one; W need not be monotone in between (a braked wheel's backward shear pulls
-    it down; a layered snow's crust breaks).
+    tangent evaluation.  Every element's root lies in [lower, upper]: W > target at the
+    deep end, W < target at the shallow one; W need not be monotone in between (a braked
+    wheel's backward shear pulls it down; a layered snow's crust breaks).
 
     `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`).
     Returns (theta0, R, T, M, F_y, M_z, status).
