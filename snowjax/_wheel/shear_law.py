@@ -101,8 +101,8 @@ class AbstractShearLaw(eqx.Module):
         distance of the lowest rim point to the base)."""
 
     def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel) -> tuple[Array, Array]:
-        """(g, dg/dtheta) at theta = 0, used by the closed-form rule's singularity
-        subtraction."""
+        """(g [-], dg/dtheta [1/rad]) at theta = 0, used by the closed-form rule's
+        singularity subtraction (default: no shear stress, (0, 0))."""
         zero = jnp.zeros_like(theta0)
         return zero, zero
 
