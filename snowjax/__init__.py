@@ -11,6 +11,8 @@ from ._constants import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
 from ._terrain.layered import LayeredSnow as LayeredSnow
 from ._terrain.reece import ReeceSoil as ReeceSoil
 from ._wheel.geometry import RigidWheel as RigidWheel
+from ._wheel.geometry import AbstractWheel as AbstractWheel
+from ._wheel.tire import DeflectingTire as DeflectingTire
 from ._leaves import ParameterInfo as ParameterInfo
 from ._leaves import as_float as as_float
 from ._leaves import parameter as parameter

@@ -7,6 +7,7 @@ import abc
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from equinox import AbstractVar
 from jaxtyping import Array, ArrayLike, Float
@@ -63,6 +64,9 @@ class AbstractTerrain(eqx.Module):
       starts from the closed-form load balance without shear and subtracts the
       singularity of the normal stress at the axle of a wheel on the base (the
       closed-form rule of `snowjax._wheel.contact`);
+    - `sinkage_at_pressure(pressure, width, limit)`: the inverse of the law, the sinkage
+      at which it reaches a pressure (default: bisection; closed forms for the built-in
+      laws), used by a deflecting tyre (`DeflectingTire`) to place its flattened tread;
     - `reference()` (abstract class method): a valid parameter set of the kind, which
       stands in for invalid batch elements.
     """
@@ -120,6 +124,45 @@ class AbstractTerrain(eqx.Module):
         width b [m]: `pressure(depth - clearance)` by default; a law with a singularity
         at the base writes it without the cancellation of depth - clearance."""
         return self.pressure(self.depth - clearance, width)
+
+    def sinkage_at_pressure(
+        self,
+        pressure: Float[ArrayLike, "..."],
+        width: Float[ArrayLike, "..."],
+        limit: Float[ArrayLike, "..."],
+    ) -> Float[Array, "..."]:
+        """Sinkage z [m] in [0, `limit`] at which the law reaches `pressure` [Pa] under a
+        contact of width b [m]: the inverse of `pressure`; `limit` [m] where the law stays
+        below `pressure` up to there.
+
+        Default: 64 bisection halvings of [0, limit] (a law that rises with sinkage; for
+        one that jumps, e.g. `LayeredSnow`'s ice failure, the first crossing is not
+        guaranteed), then one Newton correction whose derivative is held fixed, which
+        gives the exact first derivatives of the root (implicit function theorem) with
+        respect to the pressure, the width and every parameter.  A law with a closed
+        form overrides it.
+        """
+        p = jnp.asarray(pressure)
+        limit = jnp.asarray(limit)
+        shape = jnp.broadcast_shapes(p.shape, limit.shape)
+        lo = jnp.zeros(shape, jnp.result_type(p, limit, float))
+        hi = jnp.broadcast_to(limit, shape).astype(lo.dtype)
+        law = jax.lax.stop_gradient(self)
+        p_stop = jax.lax.stop_gradient(p)
+
+        def halve(_, bounds):
+            lo, hi = bounds
+            mid = 0.5 * (lo + hi)
+            below = law.pressure(mid, jax.lax.stop_gradient(width)) < p_stop
+            return jnp.where(below, mid, lo), jnp.where(below, hi, mid)
+
+        _, z = jax.lax.fori_loop(0, 64, halve, (lo, hi))
+        z = jax.lax.stop_gradient(z)
+        sigma, slope = jax.jvp(lambda x: law.pressure(x, width), (z,), (jnp.ones_like(z),))
+        reached = (sigma >= p_stop) & (slope > 0) & jnp.isfinite(slope)
+        safe_slope = jax.lax.stop_gradient(jnp.where(reached, slope, 1.0))
+        correction = (self.pressure(z, width) - jax.lax.stop_gradient(sigma)) - (p - p_stop)
+        return jnp.where(reached, z - correction / safe_slope, hi)
 
     def constraints(self, shear: str = "classic") -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range).

@@ -85,6 +85,12 @@ class BekkerSoil(AbstractTerrain):
         """Bekker's law (2.1), `sigma = (k_c / b + k_phi) z^n` [Pa], b = `width` [m]."""
         return bekker_pressure(sinkage, width, self.k_c, self.k_phi, self.n)
 
+    def sinkage_at_pressure(self, pressure, width, limit):
+        """Bekker's law (2.1) inverted, `z = (sigma / (k_c / b + k_phi))^(1/n)` [m], capped
+        at `limit` [m]."""
+        modulus = self.k_c / width + self.k_phi
+        return jnp.minimum(_safe_power(jnp.asarray(pressure / modulus), 1 / self.n), limit)
+
     def wheel_constraints(self, width):
         modulus = self.k_c / width + self.k_phi
         return [("k_c / b + k_phi", modulus, modulus > 0, "> 0 at the wheel width b")]

@@ -88,6 +88,13 @@ class ReeceSoil(AbstractTerrain):
         converter=_as_float, metadata=SHEAR_MODULUS, default=DEFAULT_SHEAR_MODULUS, kw_only=True
     )
 
+    def sinkage_at_pressure(self, pressure, width, limit):
+        """Reece's law (2.4) inverted, `z = b (sigma / (c k'_c + gamma_s b k'_phi))^(1/n)`
+        [m], capped at `limit` [m]."""
+        modulus = self.cohesion * self.k_c_prime + self.unit_weight * width * self.k_phi_prime
+        ratio = jnp.asarray(pressure / modulus)
+        return jnp.minimum(width * _safe_power(ratio, 1 / self.n), limit)
+
     def pressure(self, sinkage, width):
         """Reece's law (2.4), `sigma = (c k'_c + gamma_s b k'_phi)(z / b)^n` [Pa]."""
         return reece_pressure(

@@ -118,6 +118,11 @@ class WongSnow(AbstractTerrain):
         """z_w: the asymptotic sinkage, the depth of the ice layer or frozen base [m]."""
         return self.z_w
 
+    def sinkage_at_pressure(self, pressure, width, limit):
+        """Wong's law (2.2) in closed form, `z = z_w [1 - exp(-sigma / p_w)]` [m] (below
+        the base for every pressure), capped at `limit` [m]."""
+        return jnp.minimum(wong_sinkage(pressure, self.p_w, self.z_w), limit)
+
     def pressure_at_clearance(self, clearance, width=None):
         """Wong's law at `clearance` = z_w - z [m] above the base, `-p_w ln(clearance /
         z_w)` [Pa] (no cancellation near the base); `+inf` on the base."""

@@ -52,7 +52,7 @@ from jaxtyping import Array, ArrayLike, Float
 from .._leaves import _is_traced
 from .._terrain.base import AbstractTerrain
 from .distribution import AbstractStressDistribution, _as_distribution, _is_front
-from .general import _power_map, _rule, _sinh_offsets, general_contact
+from .general import _power_map, _rule, _sinh_offsets, _tread_terms, general_contact
 from .geometry import (
     RigidWheel,
     _rim_sinkage_between,
@@ -74,12 +74,12 @@ def _clearance(entry_angle, diameter, terrain):
     return jnp.maximum(terrain.depth - max_sinkage(entry_angle, diameter), 0.0)
 
 
-def _closed_form_rule(terrain, distribution) -> bool:
-    """Whether the contact takes the closed-form rule: a law that offers closed forms of
-    its rim integrals (`AbstractTerrain.front_rim_integrals`: `WongSnow`) on the front
-    region (straight running; the caller checks the slip angle)."""
+def _closed_form_rule(terrain, distribution, wheel) -> bool:
+    """Whether the contact takes the closed-form rule: a rigid rim on a law that offers
+    closed forms of its rim integrals (`AbstractTerrain.front_rim_integrals`: `WongSnow`)
+    on the front region (straight running; the caller checks the slip angle)."""
     offered = type(terrain).front_rim_integrals is not AbstractTerrain.front_rim_integrals
-    return offered and _is_front(distribution)
+    return offered and _is_front(distribution) and not type(wheel).deflects
 
 
 def normal_stress(
@@ -108,7 +108,7 @@ def normal_stress(
     **Returns:** sigma [Pa]; `+inf` only at theta = 0 of a wheel resting on a Wong base.
     """
     distribution = _as_distribution(distribution)
-    if _closed_form_rule(snow, distribution):
+    if _closed_form_rule(snow, distribution, wheel):
         height = (
             _clearance(entry_angle, wheel.diameter, snow)
             + wheel.diameter * jnp.sin(jnp.asarray(theta) / 2) ** 2
@@ -118,10 +118,14 @@ def normal_stress(
 
 
 def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution):
-    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain."""
+    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain (a
+    deflecting tyre's flat at its sinkage)."""
     theta0 = jnp.asarray(entry_angle)
     stress_angle = distribution.stress_angle(jnp.asarray(theta), theta0, slip)
     z = _rim_sinkage_between(stress_angle, theta0, wheel.diameter)
+    tread = type(wheel).tread(wheel, theta0, terrain)
+    if tread is not None:
+        z = jnp.minimum(z, tread.sinkage)
     return terrain.rim_properties(z, wheel.width)
 
 
@@ -161,7 +165,7 @@ def shear_stress(
     law = _shear_law(shear)
     _check_model(wheel, snow, distribution, law)
     distribution = _as_distribution(distribution)
-    if _closed_form_rule(snow, distribution):
+    if _closed_form_rule(snow, distribution, wheel):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
         c, tan_phi, k = snow.cohesion, snow.tan_phi, snow.shear_modulus
     else:
@@ -171,6 +175,10 @@ def shear_stress(
     if not law.mobilises:
         return jnp.zeros_like(sigma)
     j = shear_displacement(theta, entry_angle, slip, wheel.diameter)
+    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
+    if tread is not None:
+        theta = jnp.asarray(theta)
+        j = j - wheel.radius * _tread_terms(theta, jnp.sin(theta), jnp.cos(theta), tread)[0]
     g = law.mobilisation(j, k, sigma, entry_angle, slip, wheel.diameter, snow)
     return (c + sigma * tan_phi) * g
 
@@ -361,7 +369,7 @@ def contact_forces(
 
     _check_model(wheel, snow, distribution, law)
     distribution = _as_distribution(distribution)
-    closed_form = _closed_form_rule(snow, distribution)
+    closed_form = _closed_form_rule(snow, distribution, wheel)
     n = type(law).nodes(law, nodes_per_panel, closed_form)  # unbound: see inputs
     return _contact_forces_jit(
         wheel, snow, distribution, entry_angle, slip, law, n, _layout(slip), closed_form
@@ -399,6 +407,7 @@ def _contact_batch(
     """
 
     def one(th, i, wh, tr, ds, sd, bt):
+        tread = type(wh).tread(wh, th, tr)
         if closed_form:
             out = _closed_form_contact(
                 th, i, wh.diameter, wh.width, tr, shear, n, bt, braking, vertical_only, moving_rule
@@ -417,6 +426,7 @@ def _contact_batch(
                 vertical_only,
                 sd,
                 bulldozing,
+                tread,
             )
         if vertical_only or sd is not None:
             return out

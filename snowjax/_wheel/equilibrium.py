@@ -48,7 +48,7 @@ from .contact import (
     _with_rule_for,
 )
 from .distribution import AbstractStressDistribution, _as_distribution
-from .geometry import RigidWheel, max_sinkage
+from .geometry import RigidWheel
 from .inputs import (
     _broadcast_shape,
     _check_model,
@@ -339,7 +339,8 @@ def _solve_layout(
     differentiable = (wheel, terrain, distribution, load, slip, side)
     wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
     tol = _tolerance(load.dtype)
-    theta_cap, reaches_base = _entry_angle_cap(terrain.depth, wheel.diameter)
+    reach = type(wheel).deepest_reach(wheel, terrain.depth)
+    theta_cap, reaches_base = _entry_angle_cap(reach, wheel.diameter)
     contact = functools.partial(
         _contact_batch,
         shear=shear,
@@ -385,7 +386,8 @@ def _solve_layout(
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
     wheel, terrain, distribution, load, slip, side = differentiable
-    theta_cap = _entry_angle_cap(terrain.depth, wheel.diameter)[0]
+    reach = type(wheel).deepest_reach(wheel, terrain.depth)
+    theta_cap = _entry_angle_cap(reach, wheel.diameter)[0]
     root = (
         (over, over & reaches_base),
         load,
@@ -405,7 +407,7 @@ def _solve_layout(
 def _safe_inputs(valid, wheel, terrain, distribution, load, slip):
     """Replace invalid elements by valid reference values so their (discarded) solve is finite."""
     pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
-    wheel = jax.tree_util.tree_map(pick, wheel, RigidWheel.thesis_tire())
+    wheel = jax.tree_util.tree_map(pick, wheel, type(wheel).reference())
     terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).reference())
     distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
     return wheel, terrain, distribution, pick(load, 5000.0), pick(slip, 0.2)
@@ -511,7 +513,7 @@ def _solve_jit(
     out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
     return WheelState(
         entry_angle=out(theta0),
-        sinkage=out(max_sinkage(theta0, wheel.diameter)),
+        sinkage=out(type(wheel).contact_sinkage(wheel, theta0, terrain)),
         motion_resistance=out(r),
         thrust=out(t),
         drawbar_pull=out(t - r),
@@ -686,7 +688,7 @@ def solve_wheel(
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
         side_rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
         _check_rules(side_rules, dtype, *_magnitude_window(dtype))
-    closed_form = slip_angle is None and _closed_form_rule(terrain, distribution)
+    closed_form = slip_angle is None and _closed_form_rule(terrain, distribution, wheel)
     nodes = type(shear).nodes(shear, nodes_per_panel, closed_form)  # unbound: see inputs
     options = (shear, nodes, int(max_steps), closed_form)
     layout = _layout(slip, warm_start=closed_form and initial_entry_angle is not None)

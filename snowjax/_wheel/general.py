@@ -138,7 +138,7 @@ def _layer_width(modulus, radius, slope):
     return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
 
 
-def _shear_sign_change(theta0, theta_r, slip, steps, taylor):
+def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=0.0):
     """Where the shear displacement (4.10) of a braked wheel changes sign inside the
     contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
     theta_star).
@@ -149,13 +149,14 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor):
     lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
     left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
     (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
-    polynomials (faster to run, more code to compile) or XLA's.
+    polynomials (faster to run, more code to compile) or XLA's.  `offset`: the root of
+    f - offset instead (a deflecting tyre's rear arc, whose travel the flat shortened).
     """
     sin_theta0 = jnp.sin(theta0)
     theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
     # The front region (theta_r None) starts at lo = 0.
     lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
-    f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0)
+    f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0) - offset
     has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
 
     def newton(_, th):
@@ -164,12 +165,81 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor):
             sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
         else:
             sin, cos = jnp.sin(th), jnp.cos(th)
-        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0)
+        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0) - offset
         slope = _shear_displacement_slope(cos, slip)
         return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
 
     angle = jax.lax.fori_loop(0, steps, newton, lo)
     return angle, has_root, theta_star
+
+
+def _tread_terms(theta, sin, cos, tread):
+    """A deflecting tyre's changes to the rim at nodes theta [rad] (`Tread`: the flat on
+    |theta| < theta_f at sinkage z_f): (shortening [-], cos_n, sin_n, element, arm_tau,
+    arm_sigma).
+
+    - shortening: the tread's travel from the entry lost to the flat, per r:
+      (theta_f - u) - (sin theta_f - sin u), u = clip(theta, -theta_f, theta_f); the
+      shear displacement (4.10) and the lateral one lose r times it.
+    - On the flat the normal points up (cos_n, sin_n) = (1, 0), the length element is
+      dx = r cos(theta) d theta (element cos theta per r d theta), the shear stress acts
+      cos(theta_f) r below the axle (arm_tau) and the normal stress at x = r sin theta in
+      front of it (arm_sigma = sin theta).  On the rim: the rim's (cos, sin), 1, 1, 0.
+    """
+    half, cos_half = tread.half_angle, tread.cos_half_angle
+    u = jnp.clip(theta, -half, half)
+    shortening = (half - u) - (jnp.sin(half) - jnp.sin(u))
+    flat = jnp.abs(theta) < half
+    one, zero = jnp.ones_like(theta), jnp.zeros_like(theta)
+    return (
+        shortening,
+        jnp.where(flat, one, cos),
+        jnp.where(flat, zero, sin),
+        jnp.where(flat, cos, one),
+        jnp.where(flat, cos_half, one),
+        jnp.where(flat, sin, zero),
+    )
+
+
+def _braking_split(theta0, theta_r, slip, radius, tread):
+    """(angle, has_root): where a braked wheel's shear displacement changes sign.
+
+    The rim's (`_shear_sign_change`).  A deflecting tyre's j equals the rim's on the entry
+    arc (theta >= theta_f); on the flat it is linear in sin(theta),
+    j = j(theta_f) + i r (sin theta_f - sin theta); on the rear arc (theta < -theta_f) it
+    is the rim's less r 2 (theta_f - sin theta_f).  The first root found, in that order.
+    """
+    split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
+    if tread is None:
+        return split, has_root
+    half = tread.half_angle
+    on_arc = has_root & (split >= half)
+    j_f = _shear_displacement(half, theta0, slip, 1.0)
+    lo = jnp.maximum(-half, jnp.zeros_like(half) if theta_r is None else theta_r)
+    sin_root = jnp.sin(half) + j_f / jnp.where(slip < 0, slip, -1.0)
+    on_flat = (slip < 0) & (sin_root > jnp.sin(lo)) & (sin_root < jnp.sin(half))
+    flat_root = jnp.arcsin(jnp.clip(sin_root, -1.0, 1.0))
+    shortening = 2 * (half - jnp.sin(half))
+    rear, rear_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False, shortening)
+    on_rear = (theta_r is not None) & rear_root & (rear < -half)
+    angle = jnp.where(on_arc, split, jnp.where(on_flat, flat_root, rear))
+    return angle, on_arc | on_flat | on_rear
+
+
+def _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution, tread):
+    """(angle, grading scale) of the panel cut at a braked wheel's sign change of the shear
+    displacement (`_braking_split`; where there is none, the middle of the contact and no
+    grading), the scale the width of the shear layer there."""
+    r = diameter / 2
+    split, has_root = _braking_split(theta0, theta_r, slip, r, tread)
+    split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
+    z_split = _rim_sinkage_between(distribution.stress_angle(split, theta0, slip), theta0, diameter)
+    k_split = terrain.rim_properties(z_split, width)[3]
+    slope = _shear_displacement_slope(jnp.cos(split), slip)
+    if tread is not None:  # on the flat dj/dx = i: dj/dtheta / r = -i cos(theta)
+        on_flat = jnp.abs(split) < tread.half_angle
+        slope = jnp.where(on_flat, -slip * jnp.cos(split), slope)
+    return split, jnp.where(has_root, _layer_width(k_split, r, slope), jnp.inf)
 
 
 def general_contact(
@@ -185,6 +255,7 @@ def general_contact(
     vertical_only=False,
     side=None,
     bulldozing=False,
+    tread=None,
 ):
     """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
 
@@ -199,6 +270,10 @@ def general_contact(
     the combined law and (W, R, T, M, F_y, M_z) are returned, F_y the lateral force [N]
     and M_z the moment about the vertical through the wheel centre [N m], with the
     sidewall bulldozing resistance if `bulldozing`.
+
+    `tread` is None (a rigid rim) or the `Tread` of a deflecting tyre (`tire.py`): its
+    flat replaces the rim on -theta_f..theta_f (`_tread_terms`), and the quadrature cuts
+    its panels at the flat's ends.
     """
     dtype = theta0.dtype
     r = diameter / 2
@@ -220,16 +295,15 @@ def general_contact(
 
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
+    if tread is not None:
+        # The flat's ends (the normal's direction turns there) and, in a rear region, the
+        # angle whose stress angle is the flat's front end (the sinkage's kink).
+        points += [(tread.half_angle, inf), (-tread.half_angle, inf)]
+        points += [(a, inf) for a in distribution.rear_angles(tread.half_angle, theta0, slip)]
     if braking and law.mobilises:
-        split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
-        split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
-        z_split = _rim_sinkage_between(
-            distribution.stress_angle(split, theta0, slip), theta0, diameter
+        points.append(
+            _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution, tread)
         )
-        k_split = terrain.rim_properties(z_split, width)[3]
-        slope = _shear_displacement_slope(jnp.cos(split), slip)
-        split_scale = jnp.where(has_root, _layer_width(k_split, r, slope), inf)
-        points.append((split, split_scale))
     for breakpoint in terrain.breakpoint_sinkages():
         # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
         # and its mirror image in the rear region.
@@ -246,11 +320,20 @@ def general_contact(
 
     # Normal stress: the terrain's law at the rim sinkage of the distribution's angle.
     theta_eff = distribution.stress_angle(theta, theta0, slip)
-    z = _below_base(_rim_sinkage_between(theta_eff, theta0, diameter), terrain.depth)
+    z = _rim_sinkage_between(theta_eff, theta0, diameter)
+    if tread is not None:
+        z = jnp.minimum(z, tread.sinkage)
+    z = _below_base(z, terrain.depth)
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(z, width)
     half_sin, half_cos = _sincos_half(theta)
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
+    # A tyre's flat: the tread's travel from the entry it shortens (per r), the direction
+    # of the normal (cos_n, sin_n), the length element per r d theta and the moment arms
+    # per r of the shear and normal stresses (`_tread_terms`).
+    shortening, cos_n, sin_n, element, arm_tau, arm_sigma = 0.0, cos, sin, None, None, None
+    if tread is not None:
+        shortening, cos_n, sin_n, element, arm_tau, arm_sigma = _tread_terms(theta, sin, cos, tread)
     tau_y = None
     if not law.mobilises:
         tau = jnp.zeros_like(sigma)
@@ -258,22 +341,32 @@ def general_contact(
             tau_y = jnp.zeros_like(sigma)
     else:
         j = _shear_displacement(theta, theta0, slip, r, sin)
+        if tread is not None:
+            j = j - r * shortening  # the tread's travel less the ground's, (1 - i) x
         strength = cohesion + sigma * tan_phi
         if side is None:
             tau = strength * law.mobilisation(j, modulus, sigma, theta0, slip, diameter, terrain)
         else:
             j_y = r * (1 - slip) * (theta0 - theta) * tan_beta
+            if tread is not None:
+                j_y = j_y - r * (1 - slip) * shortening * tan_beta
             k_y = modulus if k_lateral is None else k_lateral
             share_x, share_y = law.combined_mobilisation(j / modulus, j_y / k_y)
             tau, tau_y = strength * share_x, strength * share_y
 
     rb = r * width
-    w_int = jnp.sum((sigma * cos + tau * sin) * weight) * rb
+    rim_weight = weight  # per r d theta
+    if element is not None:
+        weight = weight * element
+    w_int = jnp.sum((sigma * cos_n + tau * sin_n) * weight) * rb
     if vertical_only:
         return w_int
-    r_int = jnp.sum(sigma * sin * weight) * rb
-    t_int = jnp.sum(tau * cos * weight) * rb
-    m_int = jnp.sum(tau * weight) * rb * r
+    r_int = jnp.sum(sigma * sin_n * weight) * rb
+    t_int = jnp.sum(tau * cos_n * weight) * rb
+    if arm_tau is None:
+        m_int = jnp.sum(tau * weight) * rb * r
+    else:
+        m_int = jnp.sum((tau * arm_tau + sigma * arm_sigma) * weight) * rb * r
     if side is None:
         return w_int, r_int, t_int, m_int
     assert tau_y is not None
@@ -281,11 +374,14 @@ def general_contact(
     mz_int = jnp.sum(tau_y * sin * weight) * rb * r
     if bulldozing:
         # Side face below the surface: depth h(theta) = r (cos theta - cos theta0) over the
-        # contact, length element r cos(theta) d theta, scaled by sin(beta).
+        # contact (the flat's depth on it), length element r cos(theta) d theta, scaled by
+        # sin(beta).
         depth = _rim_sinkage_between(theta, theta0, diameter)
+        if tread is not None:
+            depth = jnp.minimum(depth, tread.sinkage)
         q = bulldozing_pressure(depth, c_surface, tan_phi_surface, unit_weight)
         sin_beta = tan_beta / jnp.sqrt(1 + tan_beta**2)
-        f_b = q * r * cos * weight * sin_beta
+        f_b = q * r * cos * rim_weight * sin_beta
         fy_int = fy_int + jnp.sum(f_b)
         mz_int = mz_int + jnp.sum(f_b * r * sin)
     return w_int, r_int, t_int, m_int, fy_int, mz_int

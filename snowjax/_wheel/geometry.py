@@ -1,17 +1,96 @@
-"""The rigid wheel (the thesis's model of a tyre on soft snow, section 4.1)."""
+"""The wheel: the abstract module the contact pipeline runs, the rigid wheel (the thesis's
+model of a tyre on soft snow, section 4.1), and the rim geometry (4.5)-(4.10)."""
 
-from __future__ import annotations
+import abc
+from typing import ClassVar, NamedTuple
 
 import equinox as eqx
 import jax.numpy as jnp
 import numpy as np
+from equinox import AbstractVar
 from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
-from .._leaves import _as_float, _check_real_leaves, parameter
+from .._leaves import _as_float, _check_real_leaves, _parameter_rules, parameter
 
 
-class RigidWheel(eqx.Module):
+class Tread(NamedTuple):
+    """The flattened part of a deflecting tyre's tread at one entry angle.
+
+    - `half_angle`: theta_f [rad], the rim angle of the flat's front end (the flat spans
+      -theta_f..theta_f of the undeflected circle); 0 for a rigid rim.
+    - `sinkage`: z_f [m], the depth of the flat below the surface.
+    - `cos_half_angle`: cos theta_f = 1 - delta / r, delta the deflection.
+    """
+
+    half_angle: Array
+    sinkage: Array
+    cos_half_angle: Array
+
+
+class AbstractWheel(eqx.Module):
+    """A wheel the contact pipeline can run: a rigid rim (`RigidWheel`) or a tyre that
+    flattens (`DeflectingTire`), or one of your own.
+
+    What the pipeline asks of a wheel:
+
+    - `diameter` D [m] and `width` b [m] (abstract variables): the undeflected circle
+      whose entry angle theta0 the solver finds, and the width of the contact;
+    - `tread(entry_angle, terrain)`: None for a rigid rim (the default), or the `Tread`
+      (the flat part of the tread, its depth and extent) at that entry angle;
+    - `contact_sinkage(entry_angle, terrain)`: the sinkage reported as
+      `WheelState.sinkage` [m] (default the rim's, eq. 4.15);
+    - `deepest_reach(depth)`: how deep the undeflected circle may sink on a base at that
+      depth [m] (default: to the base);
+    - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
+      metadata by default);
+    - `reference()` (class method): a valid wheel of the kind, which stands in for
+      invalid batch elements.
+    """
+
+    __check_init__ = _check_real_leaves
+
+    diameter: AbstractVar[Float[Array, "..."]]
+    width: AbstractVar[Float[Array, "..."]]
+
+    #: Whether the wheel's tread can flatten (the closed-form rule of the rigid rim on
+    #: Wong snow is then not taken).
+    deflects: ClassVar[bool] = False
+    #: Prefix used in error messages ("wheel.width must be ...").
+    label: ClassVar[str] = "wheel"
+
+    @property
+    def radius(self) -> Array:
+        """r = D / 2 [m]."""
+        return self.diameter / 2
+
+    def tread(self, entry_angle, terrain) -> Tread | None:
+        """The flattened tread at entry angle theta0 [rad] on `terrain`; None: a rigid rim."""
+        return None
+
+    def contact_sinkage(self, entry_angle, terrain) -> Array:
+        """Sinkage of the lowest point of the contact [m] at entry angle theta0 [rad]."""
+        return max_sinkage(entry_angle, self.diameter)
+
+    def deepest_reach(self, depth) -> Array:
+        """The deepest the undeflected circle's lowest point may sink [m] on a base at
+        `depth` [m] (the solver's cap on the entry angle): the base itself for a rim."""
+        return depth
+
+    def constraints(self) -> list[tuple[str, Array, Array, str]]:
+        """Validity of each parameter: (field path, value, ok mask, allowed range)."""
+        return [
+            (f"{self.label}.{name}", value, ok, allowed)
+            for name, value, ok, allowed in _parameter_rules(self)
+        ]
+
+    @classmethod
+    @abc.abstractmethod
+    def reference(cls) -> "AbstractWheel":
+        """A valid wheel of this kind (stands in for invalid batch elements)."""
+
+
+class RigidWheel(AbstractWheel):
     """A rigid wheel (the thesis's model of a tyre on soft snow, section 4.1).
 
     **Fields:**
@@ -20,19 +99,12 @@ class RigidWheel(eqx.Module):
     - `width`: b [m].
     """
 
-    __check_init__ = _check_real_leaves
-
     diameter: Float[Array, "..."] = eqx.field(
         converter=_as_float, metadata=parameter("m", "wheel diameter D", lower=0.0, open_lower=True)
     )
     width: Float[Array, "..."] = eqx.field(
         converter=_as_float, metadata=parameter("m", "wheel width b", lower=0.0, open_lower=True)
     )
-
-    @property
-    def radius(self) -> Array:
-        """r = D / 2 [m]."""
-        return self.diameter / 2
 
     @classmethod
     def thesis_tire(cls) -> "RigidWheel":
@@ -42,6 +114,10 @@ class RigidWheel(eqx.Module):
         P235/75R15 tyre, whose nominal diameter (0.734 m) matches D.
         """
         return cls(diameter=THESIS_DIAMETER, width=THESIS_TIRE_WIDTH)
+
+    @classmethod
+    def reference(cls) -> "RigidWheel":
+        return cls.thesis_tire()
 
 
 # Taylor coefficients of sin(x) / x and cos(x) in powers of x^2, to x^20: on half-angles

@@ -15,7 +15,7 @@ import numpy as np
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
 from .distribution import AbstractStressDistribution, _is_front
-from .geometry import RigidWheel
+from .geometry import AbstractWheel
 from .shear_law import _shear_law
 
 # ---------------------------------------------------------------------------------------
@@ -29,12 +29,9 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
     Works on NumPy values (eager errors) and on traced, flattened batches (status): the
     rules use only arithmetic and comparisons.
     """
-    rules = _argument_rules(load, slip) + [
-        ("wheel.diameter", wheel.diameter, wheel.diameter > 0, "> 0 m"),
-        ("wheel.width", wheel.width, wheel.width > 0, "> 0 m"),
-    ]
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
     # every eager call.
+    rules = _argument_rules(load, slip) + type(wheel).constraints(wheel)
     kind = type(terrain)
     rules += [
         (f"{terrain.label}.{name}", value, ok, allowed)
@@ -273,8 +270,11 @@ def _valid_mask(wheel, terrain, distribution, load, slip, shear):
 def _check_model(wheel, terrain, distribution, shear) -> None:
     """Type checks and the refused terrain / distribution / shear combinations."""
     law = _shear_law(shear)  # ValueError for an unknown shear law, before the type checks
-    if not isinstance(wheel, RigidWheel):
-        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+    if not isinstance(wheel, AbstractWheel):
+        raise TypeError(
+            "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
+            f"snowjax.AbstractWheel, got {type(wheel).__name__}"
+        )
     if not isinstance(terrain, Terrain):
         raise TypeError(
             "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
@@ -286,3 +286,8 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
     type(law).check(law, terrain, distribution)  # unbound: an equinox bound method is slow
+    if type(wheel).deflects and law.nodes_any_terrain is None:
+        raise ValueError(
+            f"shear={law.name!r} ({type(law).__name__}) is derived for a rigid rim: use "
+            "shear='classic' (or 'none') with a deflecting tyre."
+        )

@@ -1,0 +1,171 @@
+"""A pneumatic tyre whose tread flattens where the ground would press harder than the tyre
+can carry: Bekker's and Wong's rigid / elastic modes of a flexible tyre on soft ground,
+with a smooth switch between them.
+
+Model (Bekker, *Introduction to Terrain-Vehicle Systems*, 1969, ch. 5; Wong, *Theory of
+Ground Vehicles*, 4th ed. 2008, section 2.5 "Motion resistance of a tyre"): a tyre of
+inflation pressure p_i whose carcass adds a pressure p_c carries at most
+p_i + p_c on its contact.  If the terrain, loaded by a rigid rim of the tyre's diameter,
+would press on the lowest point of the rim with less than that (the "critical ground
+pressure" p_gcr < p_i + p_c), the tyre runs like a rigid rim (rigid mode).  Otherwise
+its bottom flattens (elastic mode): a flat section at the sinkage z_f where the
+terrain's own law reaches p_i + p_c, sigma(z_f) = p_i + p_c, joined to the curved
+entry (and, with a rear distribution, exit) regions of the undeflected circle.  The
+flat is a chord of the undeflected circle of diameter D, at the deflection delta above
+the circle's lowest point; its half-angle theta_f has cos(theta_f) = 1 - 2 delta / D.
+
+The solver's unknown stays the entry angle theta0 of the undeflected circle, whose
+lowest point lies at s = D sin^2(theta0 / 2) below the surface.  Where this model
+departs from the books: the switch is smooth.  In the books the flat's pressure is
+p_f = min(sigma(s), p_i + p_c), which makes the sinkage, and with it the motion
+resistance, a function of the load with a kink at the mode boundary (in the elastic
+mode the sinkage no longer grows with the load).  Here
+
+    ln p_f = ln(p_i + p_c) - softplus(m [ln(p_i + p_c) - ln sigma(s)]) / m,
+
+a smooth minimum in log-pressure of sharpness m (`sharpness`, default 10: at
+sigma(s) = p_i + p_c the flat carries 2^(-1/m) = 0.93 of p_i + p_c; at half of it, the
+rigid rim's pressure is reduced by 1e-4 relative).  z_f = sigma^(-1)(p_f) (the
+terrain's `sinkage_at_pressure`) and delta = s - z_f follow, so every output is smooth
+(C-infinity) in the load, the pressures and every snow parameter, and the books' model
+is the limit m -> infinity.  As p_i -> infinity, p_f -> sigma(s) and the tyre is the
+rigid rim of the same diameter and width.
+
+On the flat the normal stress is vertical and the shear stress horizontal; the shear
+displacement grows along it as i x (the tread moves along the flat at the speed of the
+undeflected circumference, omega r, as in Wong's treatment of the flat), so (4.10)
+becomes j = (arc length of the tread from the entry) - (1 - i)(x_entry - x).  The
+normal stress on the flat has a moment about the axle (arm x) and the shear stress
+acts at the flat's distance r - delta below the axle.
+
+Not modelled: the carcass's hysteresis (flexing) resistance, sidewall contact with the
+snow, and the tyre's growth of contact width with deflection (the width stays the
+section width b).  A deflection beyond the section height (the rim would reach the
+ground) is not flagged by a status; compare `deflection` with `section_height`.
+"""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+from jaxtyping import Array, ArrayLike, Float
+
+from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
+from .._leaves import _as_float, parameter
+from .geometry import AbstractWheel, Tread, max_sinkage
+
+__all__ = ["DeflectingTire"]
+
+
+class DeflectingTire(AbstractWheel):
+    """A pneumatic tyre that runs as a rigid rim on soft ground and flattens on firm
+    ground (Bekker 1969; Wong, *Theory of Ground Vehicles*, section 2.5), with a smooth
+    switch between the modes (see `snowjax._wheel.tire` for the model and where it
+    departs from the books).
+
+    **Fields:**
+
+    - `diameter`: D [m], the undeflected outer diameter.
+    - `width`: b [m], the section width (the width of the contact).
+    - `section_height`: h [m], from the rim seat to the tread, 0 < h < D / 2 (the
+      largest deflection the carcass can take).
+    - `inflation_pressure`: p_i [Pa], > 0.
+    - `carcass_pressure`: p_c [Pa], >= 0: the pressure the carcass stiffness adds to
+      p_i on the contact (Wong's p_c; e.g. from the tyre's hard-surface contact area A
+      at load W, p_c = W / A - p_i).
+    - `sharpness`: m [-], > 0, of the smooth switch between the modes (default 10).
+
+    With `inflation_pressure` large the tyre is `RigidWheel(diameter, width)` (to
+    rounding, see the tests).  Every solver entry point that takes a wheel takes it;
+    `WheelState.sinkage` is the flat's sinkage z_f, and `deflection(entry_angle,
+    terrain)` gives delta.
+    """
+
+    diameter: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("m", "undeflected tyre diameter D", lower=0.0, open_lower=True),
+    )
+    width: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("m", "tyre section width b", lower=0.0, open_lower=True),
+    )
+    section_height: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("m", "tyre section height h", lower=0.0, open_lower=True),
+    )
+    inflation_pressure: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("Pa", "inflation pressure p_i", lower=0.0, open_lower=True),
+    )
+    carcass_pressure: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        default=0.0,
+        metadata=parameter("Pa", "pressure of the carcass stiffness p_c", lower=0.0),
+    )
+    sharpness: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        default=30.0,
+        metadata=parameter(
+            "-", "sharpness m of the rigid/elastic switch", lower=0.0, open_lower=True
+        ),
+    )
+
+    deflects = True
+    label = "tire"
+
+    def constraints(self) -> list[tuple[str, Array, Array, str]]:
+        """The fields' ranges, and a section height below the radius."""
+        ratio = self.section_height / self.diameter
+        rule = ("tire.section_height / diameter", ratio, ratio < 0.5, "< 0.5 (h < D / 2)")
+        return super().constraints() + [rule]
+
+    @classmethod
+    def reference(cls) -> "DeflectingTire":
+        """The thesis tyre's size (P235/75R15: D 0.736 m, b 0.235 m, h 0.176 m) at 200 kPa."""
+        return cls(THESIS_DIAMETER, THESIS_TIRE_WIDTH, 0.176, 200e3, 0.0)
+
+    def flat_pressure(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
+        """p_f [Pa]: the pressure on the flat, the smooth minimum of the rigid rim's
+        lowest-point pressure sigma(s) and p_i + p_c (module docstring)."""
+        s = max_sinkage(entry_angle, self.diameter)
+        capacity = self.inflation_pressure + self.carcass_pressure
+        rim = terrain.pressure(s, self.width)
+        # ln sigma(s) kept finite: 0 at the surface, +inf on a base (Wong's law).
+        tiny = jnp.finfo(jnp.result_type(rim)).tiny
+        log_rim = jnp.log(jnp.clip(rim, tiny, jnp.finfo(jnp.result_type(rim)).max))
+        log_capacity = jnp.log(capacity)
+        m = self.sharpness
+        return jnp.exp(log_capacity - jax.nn.softplus(m * (log_capacity - log_rim)) / m)
+
+    def deflection(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
+        """delta = s - z_f [m]: how far the flat lies above the undeflected circle's
+        lowest point at entry angle theta0 [rad]; ~0 in the rigid mode."""
+        return self._flat(entry_angle, terrain)[1]
+
+    def _flat(self, entry_angle, terrain):
+        """(z_f, delta) [m] at entry angle theta0."""
+        s = max_sinkage(entry_angle, self.diameter)
+        limit = jnp.minimum(s, terrain.depth)
+        pressure = self.flat_pressure(entry_angle, terrain)
+        z_flat = type(terrain).sinkage_at_pressure(terrain, pressure, self.width, limit)
+        return z_flat, jnp.maximum(s - z_flat, 0.0)
+
+    def tread(self, entry_angle, terrain) -> Tread:
+        """The flat at entry angle theta0 [rad]: half-angle theta_f = 2 arcsin sqrt(delta
+        / D), its sinkage z_f and cos(theta_f) = 1 - 2 delta / D."""
+        z_flat, delta = self._flat(entry_angle, terrain)
+        ratio = delta / self.diameter
+        positive = ratio > 0
+        half_sin = jnp.sqrt(jnp.where(positive, ratio, 1.0))
+        half_angle = jnp.where(positive, 2 * jnp.arcsin(jnp.minimum(half_sin, 1.0)), 0.0)
+        return Tread(half_angle, z_flat, 1 - 2 * ratio)
+
+    def deepest_reach(self, depth) -> Array:
+        """depth + h [m]: the undeflected circle may pass the base by the section height
+        (the flat stays above the base; beyond it the rim would reach the ground)."""
+        return depth + self.section_height
+
+    def contact_sinkage(self, entry_angle, terrain) -> Array:
+        """z_f [m]: the sinkage of the flat (the rim's, eq. 4.15, in the rigid mode)."""
+        return self._flat(entry_angle, terrain)[0]

@@ -1,0 +1,243 @@
+"""The deflecting tyre (`snowjax.DeflectingTire`): against an independent SciPy reference
+(`tests/reference_tire.py`) on Wong snow, Bekker soil and a terrain law defined outside
+the package, in both modes; the rigid limit; gradients across the mode boundary; the
+smoothness of the switch; float32; bad input."""
+
+from __future__ import annotations
+
+import math
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import snowjax as sj
+
+from . import reference_terrain as ref_terrain
+from . import reference_tire as ref
+from .test_extension import HyperbolicSnow
+
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+
+D, B, H = 0.736, 0.235, 0.176  # the thesis tyre's size (P235/75R15)
+CARCASS = 5e3  # p_c [Pa]
+SNOW = sj.WongSnow.thesis_fresh_snow()
+SOIL = sj.BekkerSoil.snow_us()
+
+
+def _tire(inflation, carcass=CARCASS, sharpness=30.0):
+    return sj.DeflectingTire(D, B, H, inflation, carcass, sharpness)
+
+
+def _reference_law(terrain):
+    if isinstance(terrain, sj.WongSnow):
+        return ref_terrain.wong(float(terrain.p_w), float(terrain.z_w))
+    if isinstance(terrain, sj.BekkerSoil):
+        return ref_terrain.bekker(float(terrain.n), float(terrain.k_c), float(terrain.k_phi))
+    k, h = float(terrain.modulus), float(terrain.layer_depth)
+    return lambda z, b: k * max(z, 0.0) / (1 - max(z, 0.0) / h)
+
+
+def _strength(terrain):
+    return float(terrain.cohesion), float(terrain.tan_phi), float(terrain.shear_modulus)
+
+
+# (terrain, distribution (c1, c2, c3) or None, load [N], inflation pressures [Pa]):
+# each batch spans the rigid mode (delta < 1 um), the switch and the elastic mode
+# (delta of centimetres), driving and braking.
+CASES = {
+    "wong-front": (SNOW, None, 4000.0, (3e5, 1e5, 6e4)),
+    "bekker-front": (SOIL, None, 1500.0, (1e5, 2.1e4, 1.5e4)),
+    "bekker-wong-reece-rear": (SOIL, (0.43, 0.32, -0.3), 1000.0, (1e5, 2e4, 1.5e4)),
+    "own-law-front": (HyperbolicSnow.reference(), None, 3000.0, (4e5, 1e5, 5e4)),
+}
+SLIPS = (0.2, -0.2)
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_equilibrium_matches_scipy_reference(case):
+    """Entry angle and forces of both modes within 1e-7 of quad + brentq (measured: at
+    most 1e-8)."""
+    terrain, wr, load, inflations = CASES[case]
+    distribution = None if wr is None else sj.WongReece(*wr)
+    p = np.asarray(inflations)[:, None]
+    slip = np.asarray(SLIPS)[None, :]
+    st = sj.solve_wheel(_tire(p), terrain, load, slip, distribution=distribution)
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    deflection = np.asarray(_tire(p).deflection(st.entry_angle, terrain))
+    assert deflection.min() < 1e-6 and deflection.max() > 0.01  # both modes covered
+    law = _reference_law(terrain)
+    depth = float(terrain.depth)
+    theta_max = math.acos(1 - 2 * depth / D) * (1 - 1e-9) if 2 * depth < D else None
+    for a, inflation in enumerate(inflations):
+        for k, i in enumerate(SLIPS):
+            fm, fr = (0.0, 0.0) if wr is None else (wr[0] + wr[1] * i, wr[2])
+            theta0, (w, r, t, m) = ref.solve(
+                load, i, D, B, law, *_strength(terrain), inflation + CARCASS, 30.0, fm, fr,
+                theta_max,
+            )  # fmt: skip
+            np.testing.assert_allclose(st.entry_angle[a, k], theta0, rtol=1e-7)
+            np.testing.assert_allclose(st.motion_resistance[a, k], r, rtol=1e-7)
+            np.testing.assert_allclose(st.thrust[a, k], t, rtol=1e-7)
+            np.testing.assert_allclose(st.torque[a, k], m, rtol=1e-7)
+            z_f = ref.flat(theta0, D, B, law, inflation + CARCASS, 30.0)[0]
+            np.testing.assert_allclose(st.sinkage[a, k], z_f, rtol=1e-7)
+
+
+def test_flat_carries_the_tire_pressure_and_the_sinkage_stops_growing():
+    """Elastic mode (Bekker 1969; Wong, Theory of Ground Vehicles 2.5): the flat carries
+    p_i + p_c, so its sinkage is the terrain's sinkage at that pressure whatever the load,
+    and the stress on it is that pressure."""
+    tire = _tire(1.5e4)
+    loads = np.array([1350.0, 1500.0])
+    st = sj.solve_wheel(tire, SOIL, loads, 0.2)
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    capacity = 1.5e4 + CARCASS
+    z_books = (capacity / (float(SOIL.k_c) / B + float(SOIL.k_phi))) ** (1 / float(SOIL.n))
+    # This deep in the elastic mode the smooth switch leaves the flat within 6e-4 of the
+    # books' pressure (measured 5.9e-4 and 2e-6), the sinkage within 6e-4 / n.
+    sigma = np.asarray(sj.normal_stress(0.0, st.entry_angle, tire, SOIL))
+    np.testing.assert_allclose(sigma, tire.flat_pressure(st.entry_angle, SOIL), rtol=1e-12)
+    np.testing.assert_allclose(sigma, capacity, rtol=6e-4)
+    np.testing.assert_allclose(st.sinkage, z_books, rtol=6e-4 / float(SOIL.n))
+    # ... while the undeflected circle, and the deflection, grow with the load.
+    assert np.all(np.diff(np.asarray(tire.deflection(st.entry_angle, SOIL))) > 0.01)
+
+
+@pytest.mark.parametrize(
+    "terrain, kwargs",
+    [
+        (SOIL, {}),
+        (SOIL, {"distribution": sj.WongReece(0.43, 0.32, -0.3)}),
+        (SOIL, {"slip_angle": 0.1}),
+        (SNOW, {"distribution": sj.WongReece(0.43, 0.32, -0.3)}),
+    ],
+    ids=["bekker", "bekker-wong-reece", "bekker-slip-angle", "wong-wong-reece"],
+)
+def test_infinitely_stiff_tire_is_the_rigid_wheel(terrain, kwargs):
+    """p_i = 1e12 Pa reproduces `RigidWheel` to 1e-9 (measured: 4e-14), on the same rule."""
+    slip = np.array([0.3, 0.05, -0.2])
+    rigid = sj.solve_wheel(sj.RigidWheel(D, B), terrain, 1000.0, slip, **kwargs)
+    stiff = sj.solve_wheel(_tire(1e12), terrain, 1000.0, slip, **kwargs)
+    assert np.all(np.asarray(rigid.status) == sj.Status.CONVERGED)
+    np.testing.assert_array_equal(stiff.status, rigid.status)
+    for field in ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque"):
+        np.testing.assert_allclose(getattr(stiff, field), getattr(rigid, field), rtol=1e-9)
+    if "slip_angle" in kwargs:
+        np.testing.assert_allclose(stiff.lateral_force, rigid.lateral_force, rtol=1e-9)
+        np.testing.assert_allclose(stiff.aligning_torque, rigid.aligning_torque, rtol=1e-9)
+
+
+def test_infinitely_stiff_tire_on_wong_snow_matches_the_closed_form_rule():
+    """On Wong snow's front region the rim takes the closed-form rule and the tyre the
+    any-terrain one: they agree within the rules' documented 1e-7 (measured 3e-11)."""
+    slip = np.array([0.2, -0.2])
+    rigid = sj.solve_wheel(sj.RigidWheel(D, B), SNOW, 4000.0, slip)
+    stiff = sj.solve_wheel(_tire(1e12), SNOW, 4000.0, slip)
+    for field in ("sinkage", "motion_resistance", "thrust", "torque"):
+        np.testing.assert_allclose(getattr(stiff, field), getattr(rigid, field), rtol=1e-7)
+
+
+def _outputs(x, terrain, slip=0.2):
+    """(sinkage, R, drawbar pull, torque) of x = (p_i, p_c, load, snow parameter, tan phi)."""
+    inflation, carcass, load, parameter, tan_phi = x
+    if isinstance(terrain, sj.WongSnow):
+        terrain = eqx.tree_at(lambda s: (s.p_w, s.tan_phi), terrain, (parameter, tan_phi))
+    else:
+        terrain = eqx.tree_at(lambda s: (s.k_phi, s.tan_phi), terrain, (parameter, tan_phi))
+    st = sj.solve_wheel(_tire(inflation, carcass), terrain, load, slip)
+    return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
+
+
+@pytest.mark.parametrize(
+    "terrain, load, inflations",
+    [(SNOW, 4000.0, (3e5, 1.6e5, 1.3e5, 1e5)), (SOIL, 1500.0, (5e4, 2.5e4, 2.1e4, 1.5e4))],
+    ids=["wong", "bekker"],
+)
+def test_gradients_match_central_differences_across_the_mode_boundary(terrain, load, inflations):
+    """d(sinkage, R, DP, M) / d(p_i, p_c, load, p_w or k_phi, tan phi) by the implicit
+    function theorem, against central differences (step 1e-5 relative), from the rigid
+    mode (delta ~ 1e-8 m) through the switch to the elastic mode, compared as
+    elasticities (x / y) dy/dx (measured: the largest difference a tenth of the tolerance;
+    the elastic mode's
+    motion resistance hardly changes with the entry angle, and the quadrature resolves
+    that small derivative to 4e-4 of itself)."""
+    parameter = float(terrain.p_w) if isinstance(terrain, sj.WongSnow) else float(terrain.k_phi)
+    jac = jax.jit(jax.jacfwd(lambda x: _outputs(x, terrain)))
+    value = jax.jit(lambda x: _outputs(x, terrain))
+    for inflation in inflations:
+        x = np.array([inflation, CARCASS, load, parameter, float(terrain.tan_phi)])
+        exact = np.asarray(jac(jnp.asarray(x)))
+        central = np.empty_like(exact)
+        for k in range(x.size):
+            step = np.zeros_like(x)
+            step[k] = 1e-5 * x[k]
+            central[:, k] = (np.asarray(value(x + step)) - np.asarray(value(x - step))) / (
+                2 * step[k]
+            )
+        y = np.asarray(value(x))[:, None]
+        np.testing.assert_allclose(exact * x / y, central * x / y, rtol=1e-5, atol=2e-6)
+
+
+def _slope_jump(sharpness, spacing):
+    """Largest change of d(sinkage)/d(p_i) between neighbouring p_i `spacing` apart
+    across the mode boundary (Bekker soil, 1500 N: the boundary near p_i = 21 kPa)."""
+    grid = jnp.arange(1.6e4, 2.8e4, spacing)
+    slope = jax.vmap(
+        jax.grad(lambda p: sj.solve_wheel(_tire(p, sharpness=sharpness), SOIL, 1500.0, 0.2).sinkage)
+    )(grid)
+    return float(jnp.max(jnp.abs(jnp.diff(slope)))), float(jnp.max(jnp.abs(slope)))
+
+
+def test_switch_is_continuous_in_value_and_slope():
+    """C1 across the mode boundary: the slope's largest jump between neighbours shrinks
+    with the spacing (like the spacing, for a continuous slope).  The books' hard switch
+    (approached with sharpness 1e4) fails the same test: its slope jumps."""
+    coarse, scale = _slope_jump(30.0, 500.0)
+    fine, _ = _slope_jump(30.0, 125.0)
+    assert fine < 0.5 * coarse  # measured: 0.25
+    assert coarse < 0.2 * scale
+    hard_coarse, _ = _slope_jump(1e4, 500.0)
+    hard_fine, _ = _slope_jump(1e4, 125.0)
+    assert hard_fine > 0.5 * hard_coarse
+
+
+def test_float32_has_no_nan_in_either_mode():
+    tire = jax.tree.map(lambda x: jnp.asarray(x, jnp.float32), _tire(jnp.array([3e5, 1e5, 6e4])))
+    snow = jax.tree.map(lambda x: jnp.asarray(x, jnp.float32), SNOW)
+    st = sj.solve_wheel(tire, snow, jnp.float32(4000.0), jnp.array([[0.2], [-0.2]], jnp.float32))
+    for field in ("sinkage", "motion_resistance", "drawbar_pull", "torque"):
+        assert np.all(np.isfinite(np.asarray(getattr(st, field)))), field
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    grad = jax.grad(lambda p: sj.solve_wheel(_tire(p), snow, 4000.0, 0.2).drawbar_pull)
+    assert np.isfinite(float(grad(jnp.float32(1e5))))
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"inflation_pressure": 0.0}, "tire.inflation_pressure must be finite and > 0 Pa"),
+        ({"inflation_pressure": math.nan}, "tire.inflation_pressure must be finite"),
+        ({"carcass_pressure": -1.0}, "tire.carcass_pressure must be finite and >= 0 Pa"),
+        ({"section_height": 0.4}, "tire.section_height / diameter must be finite and < 0.5"),
+        ({"sharpness": 0.0}, "tire.sharpness must be finite and > 0"),
+    ],
+)
+def test_bad_tire_inputs_are_named_eagerly_and_invalid_under_jit(kwargs, message):
+    fields = dict(
+        diameter=D, width=B, section_height=H, inflation_pressure=1e5, carcass_pressure=CARCASS
+    )
+    bad = sj.DeflectingTire(**(fields | kwargs))
+    with pytest.raises(ValueError, match=message.replace("(", r"\(").replace(")", r"\)")):
+        sj.solve_wheel(bad, SNOW, 4000.0, 0.2)
+    batch = jax.tree.map(lambda good, worse: jnp.stack([good, worse]), _tire(1e5), bad)
+    st = jax.jit(lambda t: sj.solve_wheel(t, SNOW, 4000.0, 0.2))(batch)
+    assert list(np.asarray(st.status)) == [sj.Status.CONVERGED, sj.Status.INVALID_INPUT]
+    assert np.isnan(float(st.sinkage[1]))
+
+
+def test_the_simplified_shear_law_is_refused():
+    with pytest.raises(ValueError, match="derived for a rigid rim"):
+        sj.solve_wheel(_tire(1e5), SNOW, 4000.0, 0.2, shear="simplified")
