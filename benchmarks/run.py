@@ -450,12 +450,29 @@ def main(argv=None):
             "WongSnow, slip angle 10 deg + Wong-Reece + bulldozing": (
                 SNOW, wong_reece, 1, beta, bulldozing,
             ),
+            # The deflecting tyre (the thesis tyre's size, section height 0.176 m, 100 kPa:
+            # both modes over these loads), against the rigid rows of the same terrain.
+            "DeflectingTire 100 kPa on WongSnow, front region": (SNOW, None, 1, 0.0, None),
+            "DeflectingTire 100 kPa on BekkerSoil.snow_us, front region": (
+                sj.BekkerSoil.snow_us(), None, 9, 0.0, None,
+            ),
         }  # fmt: skip
+        tire = sj.DeflectingTire(WHEEL.diameter, WHEEL.width, 0.176, 100e3)
+        rigid_rows = {
+            "DeflectingTire 100 kPa on WongSnow, front region": f"throughput_{n_ref}",
+            "DeflectingTire 100 kPa on BekkerSoil.snow_us, front region": (
+                "throughput_BekkerSoil.snow_us, front region"
+            ),
+        }
         for name, (terrain, dist, divisor, angle, lateral) in terrains.items():
+            wheel = tire if name in rigid_rows else WHEEL
 
-            def run(terrain=terrain, dist=dist, ld=load / divisor, angle=angle, lateral=lateral):
+            def run(
+                terrain=terrain, dist=dist, ld=load / divisor, angle=angle, lateral=lateral,
+                wheel=wheel,
+            ):  # fmt: skip
                 st = sj.solve_wheel(
-                    WHEEL, terrain, ld, slip, distribution=dist, slip_angle=angle, lateral=lateral
+                    wheel, terrain, ld, slip, distribution=dist, slip_angle=angle, lateral=lateral
                 )
                 st.entry_angle.block_until_ready()
                 return st
@@ -470,6 +487,12 @@ def main(argv=None):
                 f"solve_wheel {name}, batch {n_ref:,}",
                 f"{n_ref / t:,.0f} /s",
                 f"{numbers[f'throughput_{n_ref}'] / (n_ref / t):.1f}x the Wong front-region cost; "
+                + (
+                    f"{numbers[rigid_rows[name]] / (n_ref / t):.1f}x the rigid wheel's on the "
+                    "same terrain, this run; "
+                    if name in rigid_rows
+                    else ""
+                )
                 + ("loads 1-9 kN" if divisor == 1 else f"loads 1-9 kN / {divisor}")
                 + f"; status {statuses}",
             )

@@ -114,7 +114,7 @@ from ._terrain.base import Terrain
 from ._wheel.contact import ShearModel
 from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
-from ._wheel.geometry import RigidWheel
+from ._wheel.geometry import AbstractWheel, RigidWheel
 from ._wheel.model import ContactModel, _unpack_model
 from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
@@ -157,7 +157,8 @@ class MjxWheels(eqx.Module):
 
     Build it with `MjxWheels.from_model` (checks the model).  **Fields:**
 
-    - `wheel`: `RigidWheel` (diameter D, width b [m]); leaves scalar or of shape (n,).
+    - `wheel`: `RigidWheel` (diameter D, width b [m]) or another `snowjax.AbstractWheel`
+      (`DeflectingTire`); leaves scalar or of shape (n,).
     - `static_load`: each wheel's load at rest [N], the default load of `step`
       (measured by `from_model`: MuJoCo settles the model at rest, zero controls, and
       sums the floor's normal force on each wheel's geoms).
@@ -171,7 +172,7 @@ class MjxWheels(eqx.Module):
       (static; condim 1).
     """
 
-    wheel: RigidWheel
+    wheel: AbstractWheel
     static_load: Float[Array, " n"] = eqx.field(converter=_as_float)
     min_load: Float[Array, ""] = eqx.field(converter=_as_float)
     body_ids: tuple[int, ...] = eqx.field(static=True)
@@ -188,7 +189,7 @@ class MjxWheels(eqx.Module):
         cls,
         model: mujoco.MjModel,
         bodies: Sequence[str | int],
-        wheel: RigidWheel | None = None,
+        wheel: AbstractWheel | None = None,
         *,
         axes: Sequence[Sequence[float]] | None = None,
         min_load: float = 100.0,
@@ -202,23 +203,27 @@ class MjxWheels(eqx.Module):
         - `bodies`: wheel bodies, by name or id; each must have exactly one hinge joint
           (its spin) and at least one collision geom (`contype` or `conaffinity` != 0),
           all of them `condim="1"` and only able to touch geoms with `condim="1"`.
-        - `wheel`: `RigidWheel` (D, b [m]); default `RigidWheel.thesis_tire()`.  Sphere
-          and cylinder collision geoms must have radius D/2 (within `radius_rtol`).
+        - `wheel`: `RigidWheel` (D, b [m]) or `DeflectingTire`; default
+          `RigidWheel.thesis_tire()`.  Sphere and cylinder collision geoms must have
+          radius D/2 (within `radius_rtol`).
         - `axes`: spin axis per wheel in the body frame; default the hinge's axis.
         - `min_load`: lift-off threshold [N], > 0.
         - `settle_time`: how long MuJoCo (C, not MJX) lets the model settle at rest from
           `qpos0` with zero controls to measure `static_load` [s].
 
         **Raises:** `TypeError` for a model that is not a `mujoco.MjModel` or a wheel that
-        is not a `RigidWheel`; `ValueError` naming the body or geom for an unknown body, a
-        body without exactly one hinge, without collision geoms, with a frictional
+        is not a `snowjax.AbstractWheel`; `ValueError` naming the body or geom for an
+        unknown body, a body without exactly one hinge, without collision geoms, with a frictional
         (condim > 1) contact or a radius that is not D/2.
         """
         if not isinstance(model, mujoco.MjModel):
             raise TypeError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
         wheel = RigidWheel.thesis_tire() if wheel is None else wheel
-        if not isinstance(wheel, RigidWheel):
-            raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+        if not isinstance(wheel, AbstractWheel):
+            raise TypeError(
+                "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
+                f"snowjax.AbstractWheel, got {type(wheel).__name__}"
+            )
         if not (np.isfinite(min_load) and min_load > 0):
             raise ValueError(f"min_load must be finite and > 0 N; got {min_load!r}")
         if len(bodies) == 0:

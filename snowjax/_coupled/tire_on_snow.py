@@ -32,7 +32,7 @@ from .._tire.tire import (
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel
 from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 
@@ -119,7 +119,7 @@ def _combine_jit(state: WheelState, load, slip, slip_angle, coefficients, parame
 
 
 def tire_forces_on_snow(
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     terrain: Terrain | ContactModel,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
@@ -179,7 +179,9 @@ def tire_forces_on_snow(
     **Arguments** (`load`, `slip`, `slip_angle`, the leaves of `wheel`, `terrain`,
     `distribution` and of `parameters` or `coefficients` broadcast with NumPy rules):
 
-    - `wheel`: [`snowjax.RigidWheel`][] (diameter [m], width [m]).
+    - `wheel`: [`snowjax.RigidWheel`][] (diameter [m], width [m]) or
+      [`snowjax.DeflectingTire`][] (its sinkage and motion resistance those of the tyre
+      that flattens; `snowjax reproduce` Fig. T.3).
     - `terrain`: any [`snowjax.Terrain`][], e.g. `WongSnow.thesis_fresh_snow()`, or a
       [`snowjax.ContactModel`][] (then leave `shear` and `distribution` out).
     - `load`: vertical wheel load F_z [N], > 0.

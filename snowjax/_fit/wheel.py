@@ -36,7 +36,7 @@ from .._terrain.wong import WongSnow
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.equilibrium import Status, solve_wheel
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
@@ -105,16 +105,17 @@ class _WheelResidual(eqx.Module):
     shear: ShearModel = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     solve_max_steps: int = eqx.field(static=True)
-    # (owner, field path) of each fitted variable; owner "terrain", "distribution" or
-    # "lateral".
+    # (owner, field path) of each fitted variable; owner "terrain", "distribution",
+    # "lateral" or "wheel".
     targets: tuple = eqx.field(static=True, default=())
 
     def __call__(self, u, args):
         wheel, snow, distribution, lateral, load, slip, slip_angle, data, scale, transform = args
         values = transform(u)
-        new = {"terrain": {}, "distribution": {}, "lateral": {}}
+        new = {"terrain": {}, "distribution": {}, "lateral": {}, "wheel": {}}
         for i, (owner, path) in enumerate(self.targets):
             new[owner][path] = values[i]
+        wheel = _with_leaves(wheel, new["wheel"])
         snow = _with_leaves(snow, new["terrain"])
         if distribution is not None:
             distribution = _with_leaves(distribution, new["distribution"])
@@ -156,19 +157,32 @@ def _lateral_names(lateral) -> dict[str, tuple[str, str]]:
     return {f"lateral.{p}": ("lateral", p) for p, v in leaves.items() if v is not None}
 
 
-def _resolve_fit_names(fit, terrain, distribution, lateral=None):
+def _wheel_names(wheel) -> dict[str, tuple[str, str]]:
+    """`wheel.<field>` -> ("wheel", field) for the array leaves of a wheel that deflects
+    (`DeflectingTire`: e.g. `wheel.carcass_pressure`); none for a rigid rim."""
+    if wheel is None or not type(wheel).deflects:
+        return {}
+    return {f"wheel.{p}": ("wheel", p) for p in _module_leaves(wheel)}
+
+
+def _resolve_fit_names(fit, terrain, distribution, lateral=None, wheel=None):
     """User names -> (canonical names, (owner, path) targets), or a ValueError."""
-    table = {**_parameter_names(terrain, distribution), **_lateral_names(lateral)}
+    table = {
+        **_parameter_names(terrain, distribution),
+        **_lateral_names(lateral),
+        **_wheel_names(wheel),
+    }
     aliases = dict((name, name) for name in table)
     for name, (owner, path) in table.items():
         aliases.setdefault(f"{owner}.{path}", name)
-    if isinstance(terrain, WongSnow) and distribution is None:
+    if isinstance(terrain, WongSnow) and distribution is None and not _wheel_names(wheel):
         allowed_txt = f"{WHEEL_PARAMETERS}"
     else:
         allowed_txt = (
             f"{tuple(table)} (for {type(terrain).__name__}"
             + ("" if distribution is None else f" with {type(distribution).__name__}")
             + ("" if lateral is None else " and Lateral")
+            + ("" if not _wheel_names(wheel) else f" on a {type(wheel).__name__}")
             + "; the prefixed forms 'terrain.<name>' / 'distribution.<name>' work too)"
         )
     if isinstance(fit, str):
@@ -275,14 +289,16 @@ def _wheel_data(load, slip, measured, scale, slip_angle=None):
     return ld, sl, m, quantities, data, np.stack(scales), sa
 
 
-def _start_values(snow, distribution, targets, lateral=None) -> dict[str, dict[str, float]]:
+def _start_values(
+    snow, distribution, targets, lateral=None, wheel=None
+) -> dict[str, dict[str, float]]:
     """Every leaf as a float, owner -> path -> value: scalar, finite; log-space ones
     > 0 when fitted (>= 0 otherwise)."""
-    owners = ("terrain", "distribution", "lateral")
+    owners = ("terrain", "distribution", "lateral", "wheel")
     fitted_paths = {owner: {p for o, p in targets if o == owner} for owner in owners}
     start: dict[str, dict[str, float]] = {owner: {} for owner in owners}
-    objects = {"terrain": snow, "distribution": distribution, "lateral": lateral}
-    labels = {"terrain": "snow", "distribution": "distribution", "lateral": "lateral"}
+    objects = {"terrain": snow, "distribution": distribution, "lateral": lateral, "wheel": wheel}
+    labels = {o: "snow" if o == "terrain" else o for o in owners}
     infos = _infos(objects)
     for owner, obj in objects.items():
         if obj is None:
@@ -412,7 +428,7 @@ def _status_warnings(status: np.ndarray, m: int) -> list[str]:
 
 
 def fit_wheel(
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     snow: Terrain | ContactModel,
     load: Float[ArrayLike, " m"],
     slip: Float[ArrayLike, " m"],
@@ -449,9 +465,12 @@ def fit_wheel(
     `cohesion`, `tan_phi`, `shear_modulus`; `LayeredSnow`: `top.p_w`, ...,
     `bottom.shear_modulus` (dotted: the nested layers) and `ice_failure_pressure`;
     `WongReece`: `c1`, `c2`, `c3`.  `distribution.c1` / `terrain.k_phi` (prefixed) are
-    accepted too, and are the only form of a name both objects hold.
-    `fit_parameter_names(terrain, distribution)` lists them; an unknown name raises a
-    `ValueError` that lists them.  `FitResult.params` uses the unprefixed names.
+    accepted too, and are the only form of a name both objects hold.  A
+    `DeflectingTire`'s leaves as `wheel.<field>` (`wheel.carcass_pressure`,
+    `wheel.inflation_pressure`, ...).
+    `fit_parameter_names(terrain, distribution)` lists the terrain's and distribution's;
+    an unknown name raises a `ValueError` that lists them.  `FitResult.params` uses the
+    unprefixed names.
 
     **Fitted variables.**  As each field's `ParameterInfo` says (`snowjax.parameter`):
     parameters that are never negative — `p_w`, `z_w`, `cohesion`, `tan_phi`,
@@ -491,7 +510,9 @@ def fit_wheel(
 
     **Arguments:**
 
-    - `wheel`: `RigidWheel` (scalar diameter [m], width [m]).
+    - `wheel`: `RigidWheel` (scalar diameter [m], width [m]) or `DeflectingTire` (scalar
+      leaves; its parameters can be fitted as `wheel.<field>`, e.g.
+      `fit=("wheel.carcass_pressure",)`).
     - `snow`: the terrain, any `snowjax.Terrain` with scalar leaves (SI units: Pa, m,
       N/m^(n+1), N/m^(n+2), N/m^3; see each class): start values of the fitted
       parameters and fixed values of the rest.  Every value must be valid for
@@ -539,8 +560,11 @@ def fit_wheel(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_name(shear)
-    if not isinstance(wheel, RigidWheel):
-        raise TypeError(f"wheel must be a snowjax.RigidWheel, got {type(wheel).__name__}")
+    if not isinstance(wheel, AbstractWheel):
+        raise TypeError(
+            "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
+            f"snowjax.AbstractWheel, got {type(wheel).__name__}"
+        )
     if not isinstance(snow, Terrain):
         raise TypeError(
             "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
@@ -559,7 +583,7 @@ def fit_wheel(
         lateral = Lateral()
     if slip_angle is None:
         lateral = None
-    names, targets = _resolve_fit_names(fit, snow, distribution, lateral)
+    names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
     shear_model: ShearModel = shear
     _check_model(wheel, snow, distribution, shear_model)
@@ -573,13 +597,11 @@ def fit_wheel(
             f"fit_wheel fits {len(names)} parameters and needs more than {len(names)} "
             f"measured values; got {m_total}"
         )
-    start = _start_values(snow, distribution, targets, lateral)
+    start = _start_values(snow, distribution, targets, lateral, wheel)
     _check_solvable(wheel, snow, distribution, ld, sl, shear_model)
 
     dtype = jnp.result_type(float)
-    wheel_a = RigidWheel(
-        jnp.asarray(float(wheel.diameter), dtype), jnp.asarray(float(wheel.width), dtype)
-    )
+    wheel_a = _rebuild(wheel, start["wheel"], dtype)
     if isinstance(snow, WongSnow):
         snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
     else:
@@ -587,7 +609,9 @@ def fit_wheel(
     dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
     lateral_a = None if lateral is None else _rebuild(lateral, start["lateral"], dtype)
     theta0 = np.array([start[o][p] for o, p in targets])
-    infos = _infos({"terrain": snow, "distribution": distribution, "lateral": lateral})
+    infos = _infos(
+        {"terrain": snow, "distribution": distribution, "lateral": lateral, "wheel": wheel}
+    )
     transform = _transform(targets, theta0, infos)
     residual = _WheelResidual(
         names=names,
@@ -661,6 +685,7 @@ def fit_wheel(
     if distribution is not None:
         fitted_dist = _rebuild(distribution, final["distribution"], dtype)
     fitted_lateral = None if lateral is None else _rebuild(lateral, final["lateral"], dtype)
+    fitted_wheel = _rebuild(wheel, final["wheel"], dtype)
     q_txt = ", ".join(quantities)
     model_txt = ""
     if not (isinstance(snow, WongSnow) and distribution is None):
@@ -681,6 +706,7 @@ def fit_wheel(
             "terrain": fitted_snow,
             "distribution": fitted_dist,
             "lateral": fitted_lateral,
+            "wheel": fitted_wheel,
             "transforms": {nm: "log" if log else "linear" for nm, log in zip(names, transform.log)},
             "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},
             "status": status,

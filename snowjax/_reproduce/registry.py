@@ -60,6 +60,7 @@ FIGURES: tuple[FigureSpec, ...] = (
     chapter4.fig_4_8,
     terrain.fig_terrains,
     tire_on_snow.fig_tire_on_snow,
+    tire_on_snow.fig_deflecting_tire,
 )
 
 # Report sections that are tables, after the figures: one line per table.

@@ -4,12 +4,13 @@ chapter-4 snow against the rigid-wheel lateral model, over slip x slip angle.
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 
 from .._coupled.tire_on_snow import tire_forces_on_snow
 from .._terrain.wong import WongSnow
 from .._tire.tire import lateral_friction
-from .._wheel.equilibrium import solve_wheel
+from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import RigidWheel
 from .chapter4 import WHEEL_LOADS
 from .plotting import status_names, subplots
@@ -129,4 +130,132 @@ def fig_tire_on_snow(ctx: Context) -> FigureResult:
         rows,
         comparison,
         verdict=f"rigid-wheel F_y is {ratio.min():.2f}–{ratio.max():.2f}× the chapter-3 F_y",
+    )
+
+
+INFLATION_KPA = (70.0, 350.0)  # the range of Fig. T.3 [kPa]
+DEFLECTING_SLIP = 0.2  # [-]
+SECTION_HEIGHT = 0.176  # [m], P235/75R15: 0.75 x 0.235 m
+
+DEFLECTING_CAPTION = (
+    "Beyond the thesis, whose wheel is a rigid rim. Sinkage, motion resistance and drawbar "
+    "pull at slip 0.2 against inflation pressure p_i for the thesis tyre's size (0.736 m x "
+    "0.235 m, section height 0.176 m, carcass pressure p_c = 0) as a deflecting tyre "
+    "(`DeflectingTire`: Bekker's / Wong's rigid and elastic modes with a smooth switch) on "
+    "the fresh snow of Table 4.1, at the thesis's loads 3.5, 5, 7.5 kN (colours); dashed: "
+    "the rigid rim (the tyre at p_i = 1e12 Pa, the rim within the quadrature's 1e-7); "
+    "dotted verticals: the mode boundary, where p_i + p_c equals the "
+    "pressure the rigid rim puts on its lowest point (Wong's critical pressure p_gcr). "
+    "The last panel: chapter 3's net longitudinal force on snow (`tire_forces_on_snow`, "
+    "3.14 minus the motion resistance) with the tyre's and the rim's motion resistance."
+)
+
+
+@figure(
+    "T.3",
+    "deflecting tyre vs rigid rim over inflation pressure on the thesis snow",
+    DEFLECTING_CAPTION,
+    ("4.14", "4.15", "4.16", "2.10", "3.14"),
+)
+def fig_deflecting_tire(ctx: Context) -> FigureResult:
+    from .._wheel.tire import DeflectingTire
+
+    rim = RigidWheel.thesis_tire()
+    snow = WongSnow.thesis_fresh_snow()
+    p_kpa = np.linspace(*INFLATION_KPA, 8 if ctx.small else 57)
+    loads = np.array(WHEEL_LOADS)[:, None]
+    # The last column, p_i = 1e12 Pa, is the rigid rim (the tyre's limit, tested to
+    # 1e-9): one solve and one chapter-3 evaluation for the tyres and the rim.
+    pressures = np.append(p_kpa * 1e3, 1e12)[None, :]
+    tires = DeflectingTire(rim.diameter, rim.width, SECTION_HEIGHT, pressures)
+    both = solve_wheel(tires, snow, loads, DEFLECTING_SLIP)
+    net_both = np.asarray(
+        tire_forces_on_snow(tires, snow, loads, DEFLECTING_SLIP, 0.0).longitudinal_force
+    )
+    st = jax.tree.map(lambda x: x[:, :-1], both)
+    rigid = jax.tree.map(lambda x: x[:, -1], both)
+    net, net_rigid = net_both[:, :-1], net_both[:, -1]
+    deflection = np.asarray(tires.deflection(both.entry_angle, snow))[:, :-1]
+    # The mode boundary: the rigid rim's pressure on its lowest point (p_c = 0).
+    p_gcr = np.asarray(snow.pressure(rigid.sinkage, rim.width)) / 1e3
+    statuses = {int(s) for s in np.asarray(st.status).ravel()}
+    statuses |= {int(s) for s in np.asarray(rigid.status).ravel()}
+
+    panels = (
+        ("sinkage [mm]", 1e3 * np.asarray(st.sinkage), 1e3 * np.asarray(rigid.sinkage)),
+        ("motion resistance [N]", np.asarray(st.motion_resistance), rigid.motion_resistance),
+        ("drawbar pull [N]", np.asarray(st.drawbar_pull), rigid.drawbar_pull),
+        ("chapter 3 on snow: net F_x [N]", net, net_rigid),
+    )
+    # Only equilibria are drawn: at 7.5 kN and 70-80 kPa the undeflected circle would need
+    # an entry angle beyond 85 degrees (Status.ENTRY_ANGLE_LIMIT).
+    converged = np.asarray(st.status) == Status.CONVERGED
+    fig, axes = subplots(1, len(panels), figsize=(15, 4.0))
+    for ax, (label, values, rim_values) in zip(axes, panels):
+        values = np.where(converged, values, np.nan)
+        for a, load in enumerate(WHEEL_LOADS):
+            ax.plot(p_kpa, values[a], "-", color=f"C{a}", label=f"tyre, F_z = {load / 1e3:g} kN")
+            ax.axhline(float(np.asarray(rim_values)[a]), color=f"C{a}", ls="--", lw=0.8)
+            ax.axvline(p_gcr[a], color=f"C{a}", ls=":", lw=0.8)
+        ax.set_xlabel("inflation pressure p_i [kPa]")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(
+        "Fig. T.3 (beyond the thesis): deflecting tyre (solid) vs rigid rim (dashed), "
+        "slip 0.2; dotted: mode boundary",
+        fontsize=10,
+    )
+    fig.tight_layout()
+
+    rows = [
+        [
+            float(load),
+            float(p_kpa[k]),
+            float(deflection[a, k]),
+            float(np.asarray(st.sinkage)[a, k]),
+            float(np.asarray(st.motion_resistance)[a, k]),
+            float(np.asarray(st.drawbar_pull)[a, k]),
+            float(net[a, k]),
+            int(np.asarray(st.status)[a, k]),
+        ]
+        for a, load in enumerate(WHEEL_LOADS)
+        for k in range(p_kpa.size)
+    ]
+    cols = [
+        "load_N",
+        "inflation_pressure_kPa",
+        "deflection_m",
+        "sinkage_m",
+        "motion_resistance_N",
+        "drawbar_pull_N",
+        "net_Fx_chapter3_on_snow_N",
+        "status",
+    ]
+    a5 = list(WHEEL_LOADS).index(5000.0)
+    low = 0  # p_i = 70 kPa
+    comparison = (
+        "Not in the thesis. The rigid rim presses "
+        + ", ".join(f"{p:.0f}" for p in p_gcr)
+        + " kPa on its lowest point at 3.5, 5 and 7.5 kN (slip 0.2): a tyre inflated above "
+        "that runs as the rim (sinkage, resistance and pull equal to it); below, it "
+        f"flattens. At 5 kN and p_i = {p_kpa[low]:.0f} kPa the tyre deflects "
+        f"{1e3 * deflection[a5, low]:.0f} mm and sinks {1e3 * float(st.sinkage[a5, low]):.0f} "
+        f"mm against the rim's {1e3 * float(rigid.sinkage[a5]):.0f} mm; its motion "
+        f"resistance is {float(st.motion_resistance[a5, low]):.0f} N against "
+        f"{float(rigid.motion_resistance[a5]):.0f} N and its drawbar pull "
+        f"{float(st.drawbar_pull[a5, low]):.0f} N against {float(rigid.drawbar_pull[a5]):.0f} "
+        "N. Statuses: "
+        + ", ".join(sorted(status_names(statuses)))
+        + f" (ENTRY_ANGLE_LIMIT, not drawn: {int((~converged).sum())} point(s) at 7.5 kN "
+        "and the lowest inflation pressures, where the undeflected circle would enter the "
+        "snow beyond 85 degrees)."
+    )
+    ratio = float(st.motion_resistance[a5, low]) / float(rigid.motion_resistance[a5])
+    return FigureResult(
+        fig,
+        cols,
+        rows,
+        comparison,
+        verdict=f"at 5 kN a 70 kPa tyre has {ratio:.2f}x the rim's motion resistance",
     )

@@ -84,7 +84,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.equilibrium import solve_wheel
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel
 from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
@@ -116,7 +116,8 @@ class PlanarVehicle(eqx.Module):
     - `yaw_inertia`: I_z, moment of inertia about the vertical through the CG [kg m^2].
     - `wheel_inertia`: I_w, moment of inertia of each wheel about its axle, including the
       driveline reflected to it [kg m^2]; scalar or one value per wheel, shape (4,).
-    - `wheel`: `RigidWheel` (diameter D, width b [m]), the same on every corner.
+    - `wheel`: `RigidWheel` (diameter D, width b [m]) or `DeflectingTire`, the same on
+      every corner.
     - `wheelbase`: L, distance from the rear to the front axle [m].
     - `track_width`: w, distance between the left and right wheel centres [m].
     - `cg_to_front_axle`: a, distance of the CG behind the front axle [m], 0 < a < L;
@@ -133,7 +134,7 @@ class PlanarVehicle(eqx.Module):
     mass: Float[Array, ""] = eqx.field(converter=_as_float)
     yaw_inertia: Float[Array, ""] = eqx.field(converter=_as_float)
     wheel_inertia: Float[Array, "..."] = eqx.field(converter=_as_float)
-    wheel: RigidWheel
+    wheel: AbstractWheel
     wheelbase: Float[Array, ""] = eqx.field(converter=_as_float)
     track_width: Float[Array, ""] = eqx.field(converter=_as_float)
     cg_to_front_axle: Float[Array, ""] | None = eqx.field(converter=_as_float, default=None)

@@ -91,7 +91,7 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model, solve_wheel
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _validate_eagerly
 from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
@@ -266,7 +266,7 @@ def wheel_forces(
     speed: Float[ArrayLike, "..."],
     wheel_speed: Float[ArrayLike, "..."],
     load: Float[ArrayLike, "..."],
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     snow: Terrain | ContactModel,
     shear: ShearModel | AbstractShearLaw = "classic",
     *,
@@ -297,10 +297,10 @@ def wheel_forces(
     - `speed`: v, forward speed of the axle over the snow [m/s].
     - `wheel_speed`: omega, spin of the wheel [rad/s] (positive rolls forwards).
     - `load`: vertical load F_z on the wheel [N], > 0.
-    - `wheel`, `snow`: `RigidWheel` (D, b [m]) and the terrain, any `snowjax.Terrain`
-      (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI parameter sets), or a
-      `ContactModel` in place of the terrain (then leave `shear`, `distribution` and
-      `nodes_per_panel` out).
+    - `wheel`, `snow`: `RigidWheel` (D, b [m]) or `DeflectingTire`, and the terrain,
+      any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI
+      parameter sets), or a `ContactModel` in place of the terrain (then leave `shear`,
+      `distribution` and `nodes_per_panel` out).
     - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
       refused: its braking extension can push a braked wheel forward).
     - `speed_eps`: regularisation speed [m/s], > 0.
@@ -370,7 +370,7 @@ class Vehicle(eqx.Module):
       `m g / num_wheels` (g = 9.80665 m/s^2), with no load transfer.
     - `wheel_inertia`: I, moment of inertia of each wheel about its axle, including the
       driveline reflected to it [kg m^2]; scalar or one value per wheel.
-    - `wheel`: `RigidWheel` (diameter D, width b [m]).
+    - `wheel`: `RigidWheel` (diameter D, width b [m]) or `DeflectingTire`.
     - `num_wheels`: number of wheels n (static).  Which of them are driven is set by
       the torque: a wheel with zero applied torque rolls freely.
     """
@@ -379,7 +379,7 @@ class Vehicle(eqx.Module):
 
     mass: Float[Array, ""] = eqx.field(converter=_as_float)
     wheel_inertia: Float[Array, "..."] = eqx.field(converter=_as_float)
-    wheel: RigidWheel
+    wheel: AbstractWheel
     num_wheels: int = eqx.field(static=True, default=4)
 
     @property

@@ -54,7 +54,7 @@ from .._terrain.base import AbstractTerrain
 from .distribution import AbstractStressDistribution, _as_distribution, _is_front
 from .general import _power_map, _rule, _sinh_offsets, _tread_terms, general_contact
 from .geometry import (
-    RigidWheel,
+    AbstractWheel,
     _rim_sinkage_between,
     _shear_displacement,
     _sincos_half,
@@ -85,7 +85,7 @@ def _closed_form_rule(terrain, distribution, wheel) -> bool:
 def normal_stress(
     theta: ArrayLike,
     entry_angle: ArrayLike,
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     snow: AbstractTerrain,
     *,
     slip: ArrayLike = 0.0,
@@ -133,7 +133,7 @@ def shear_stress(
     theta: ArrayLike,
     entry_angle: ArrayLike,
     slip: ArrayLike,
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     snow: AbstractTerrain,
     shear: ShearModel | AbstractShearLaw = "classic",
     *,
@@ -328,7 +328,7 @@ def _closed_form_contact(
 
 
 def contact_forces(
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     snow: AbstractTerrain | ContactModel,
     entry_angle: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
@@ -347,9 +347,9 @@ def contact_forces(
 
     **Arguments:**
 
-    - `wheel`: `RigidWheel`; `snow`: any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-      `LayeredSnow`), SI, or a `ContactModel` (then leave `shear`, `distribution` and
-      `nodes_per_panel` out).
+    - `wheel`: `RigidWheel` or `DeflectingTire`; `snow`: any terrain (`WongSnow`,
+      `BekkerSoil`, `ReeceSoil`, `LayeredSnow`), SI, or a `ContactModel` (then leave
+      `shear`, `distribution` and `nodes_per_panel` out).
     - `entry_angle`: theta0 [rad], 0 < theta0 <= arccos(1 - 2 depth / D).
     - `slip`: driving slip i [-], eq. (2.6); negative when braking.
     - `shear`: the shear law, `JanosiHanamoto()` / `"classic"` (4.11),

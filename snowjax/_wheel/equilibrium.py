@@ -48,7 +48,7 @@ from .contact import (
     _with_rule_for,
 )
 from .distribution import AbstractStressDistribution, _as_distribution
-from .geometry import RigidWheel
+from .geometry import AbstractWheel
 from .inputs import (
     _broadcast_shape,
     _check_model,
@@ -80,7 +80,8 @@ class WheelState(eqx.Module):
     """Equilibrium of a rigid wheel on snow; every field has the broadcast input shape.
 
     - `entry_angle`: theta0 [rad].
-    - `sinkage`: z0 = D/2 (1 - cos theta0), eq. (4.15) [m].
+    - `sinkage`: z0 = D/2 (1 - cos theta0), eq. (4.15) [m]; for a `DeflectingTire` the
+      sinkage of its flat (`AbstractWheel.contact_sinkage`).
     - `motion_resistance`: R_x, eq. (4.16) [N].
     - `thrust`: horizontal component of the shear stress, eq. (2.9) times r b [N].
     - `drawbar_pull`: thrust - motion resistance, eq. (2.10) [N].
@@ -525,7 +526,7 @@ def _solve_jit(
 
 
 def solve_wheel(
-    wheel: RigidWheel,
+    wheel: AbstractWheel,
     terrain: Terrain | ContactModel,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
@@ -557,7 +558,11 @@ def solve_wheel(
 
     **Arguments:**
 
-    - `wheel`: `RigidWheel(diameter [m], width [m])`.
+    - `wheel`: `RigidWheel(diameter [m], width [m])`, or `DeflectingTire(diameter,
+      width, section_height [m], inflation_pressure, carcass_pressure [Pa])`, a tyre
+      whose tread flattens where the ground would press harder than it can carry
+      (every terrain, distribution and slip angle; not `shear="simplified"`); then
+      `sinkage` is that of its flat.
     - `terrain`: any `snowjax.Terrain`: `WongSnow(p_w [Pa], z_w [m], cohesion [Pa],
       tan_phi [-], shear_modulus [m])`, `BekkerSoil(n [-], k_c [N/m^(n+1)],
       k_phi [N/m^(n+2)], cohesion [Pa], tan_phi [-], shear_modulus=[m])`,
