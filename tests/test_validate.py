@@ -88,6 +88,9 @@ def test_reported_metrics_match_the_predictions(run):
         "crrel_fit",
         "richmond_measured_rut",
         "wheel_wong",
+        "tire_wong",
+        "wheel_wong_pit",
+        "tire_wong_pit",
         "wheel_bekker",
         "bekker",
         "van_es",
@@ -99,6 +102,28 @@ def test_reported_metrics_match_the_predictions(run):
         assert int(m["n"]) == err.size
         assert float(m["rms"]) == pytest.approx(math.sqrt(np.mean(err**2)), rel=1e-5)
         assert float(m["worst"]) == pytest.approx(np.max(np.abs(err)), rel=1e-5)
+
+
+# The deflecting tyre's held-out numbers as measured (2026-11-26, README "How well does it
+# predict?"): a change that makes any of them worse by more than 10 % fails.
+TIRE_NUMBERS = {
+    ("tire_wong", "sinkage", "rms"): 0.00663,
+    ("tire_wong", "coefficient", "rms"): 0.1345,
+    ("tire_wong_pit", "sinkage", "rms"): 0.00663,
+    ("tire_wong_pit", "coefficient", "rms"): 0.0165,
+    ("tire_wong_pit", "coefficient", "bias"): 0.0064,
+}
+
+
+def test_tire_held_out_numbers_do_not_grow(run):
+    metrics = {(m["model"], m["quantity"]): m for m in _read(run / "metrics.csv")}
+    for (model, quantity, stat), value in TIRE_NUMBERS.items():
+        got = abs(float(metrics[(model, quantity)][stat]))
+        assert got <= 1.1 * value, (model, quantity, stat, got)
+    # The issue's targets: sinkage RMS <= 10 mm, R/W RMS <= 0.025, |R/W bias| <= 0.01.
+    assert float(metrics[("tire_wong_pit", "sinkage")]["rms"]) <= 0.010
+    assert float(metrics[("tire_wong_pit", "coefficient")]["rms"]) <= 0.025
+    assert abs(float(metrics[("tire_wong_pit", "coefficient")]["bias"])) <= 0.01
 
 
 def test_uncalibrated_crrel_predictions_are_the_formula(run):

@@ -6,6 +6,7 @@ from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import (
@@ -13,7 +14,7 @@ from .._constants import (
     THESIS_DIAMETER,
     THESIS_P_W,
 )
-from .._leaves import _as_float, parameter
+from .._leaves import _as_float, _is_traced, parameter
 from .base import (
     COHESION,
     SHEAR_MODULUS,
@@ -196,6 +197,54 @@ class WongSnow(AbstractTerrain):
             cohesion=0.2165 * p_w,
             tan_phi=0.0787,
             shear_modulus=diameter / 73.6,
+        )
+
+    @classmethod
+    def from_snow_pit(
+        cls,
+        depth: Float[ArrayLike, "..."],
+        density: Float[ArrayLike, "..."],
+        p_w: Float[ArrayLike, "..."],
+        cohesion: Float[ArrayLike, "..."],
+        tan_phi: Float[ArrayLike, "..."],
+        shear_modulus: Float[ArrayLike, "..."],
+        final_density: Float[ArrayLike, "..."] = 500.0,
+    ) -> "WongSnow":
+        """Wong snow from what a snow pit measures: the layer's depth and density.
+
+        Wong's z_w is the sinkage at which the layer stops compressing; a layer of depth h
+        and density rho0 compacted to the final density rho_f leaves a rut of depth
+        `z_w = h (1 - rho0 / rho_f)` (CRREL Report 95-7, Richmond, Shoop & Blaisdell 1995,
+        eq. 1), with rho_f = 500 kg/m^3 for contact pressures up to 210 kPa (550 above,
+        600 above 350 kPa, 650 above 700 kPa: `snowjax.crrel_final_density`; 500 is the
+        report's value for the CRREL Instrumented Vehicle's tyres).  Range of the report's
+        tests: depths 0.10-0.37 m, densities 110-250 kg/m^3.  p_w and the shear strength
+        are not given by depth and density (no density law for them was found in the
+        sources snowjax cites): pass them, e.g. fitted (`fit_wheel`) or Table 4.1's ratios
+        c = 0.2165 p_w, tan phi = 0.0787 (`thesis_fresh_snow`).
+
+        **Arguments** (broadcast together): `depth` h [m], `density` rho0 [kg/m^3] (below
+        `final_density`), `p_w` [Pa], `cohesion` [Pa], `tan_phi` [-], `shear_modulus` K
+        [m], `final_density` rho_f [kg/m^3] (default 500).
+
+        **Raises:** `ValueError` for a concrete density that is not below the final
+        density, or a depth that is not > 0 (z_w must be > 0).
+        """
+        h = _as_float(depth)
+        rho0, rho_f = _as_float(density), _as_float(final_density)
+        if not any(_is_traced(x) for x in (h, rho0, rho_f)):
+            ratio = np.asarray(rho0, float) / np.asarray(rho_f, float)
+            if not np.all((ratio >= 0) & (ratio < 1)) or not np.all(np.asarray(h, float) > 0):
+                raise ValueError(
+                    "WongSnow.from_snow_pit: need depth > 0 m and 0 <= density < final_density "
+                    f"(kg/m^3); got depth {h!r}, density {rho0!r}, final_density {rho_f!r}"
+                )
+        return cls(
+            p_w=p_w,
+            z_w=h * (1 - rho0 / rho_f),
+            cohesion=cohesion,
+            tan_phi=tan_phi,
+            shear_modulus=shear_modulus,
         )
 
     @classmethod

@@ -46,6 +46,8 @@ __all__ = [
 DEFAULT_WHEEL_LOAD = 6800.0  # [N], CRREL 95-7 Table 2 (interpretation, see module docs)
 DEFAULT_TYRE_WIDTH = 0.235  # [m], assumption
 CIV_FINAL_DENSITY = 500.0  # [kg/m^3], CRREL 95-7: the value used for the CIV's tyres
+CIV_INFLATION = 103e3  # [Pa], CRREL 95-7 Table 2: the CIV's tyres at the lower pressure
+CIV_SECTION_RATIO = 0.75  # section height / width [-], an assumption (a 75-series tyre)
 M113_WEIGHT_LB = 23401.0  # CRREL 95-1 Appendix A vehicle file
 LB_TO_N = 0.45359237 * 9.80665
 IN_TO_M = 0.0254
@@ -124,6 +126,46 @@ def _wong_terrain(rows, grid, diameter):
     )
 
 
+def _wong_pit_terrain(rows, grid, diameter):
+    """Wong snow from the row's depth and density (`WongSnow.from_snow_pit`: z_w = h (1 -
+    rho0 / rho_f), CRREL 95-7 eq. 1) with Table 4.1's ratios; `grid` rows (p_w [Pa],
+    rho_f [kg/m^3])."""
+    from .._terrain.wong import WongSnow
+
+    p_w, rho_f = np.asarray(grid)[None, :, 0], np.asarray(grid)[None, :, 1]
+    return WongSnow.from_snow_pit(
+        rows["snow_depth_m"][:, None],
+        rows["density_kg_m3"][:, None],
+        p_w=p_w,
+        cohesion=0.2165 * p_w,
+        tan_phi=0.0787,
+        shear_modulus=diameter / 73.6,
+        final_density=rho_f,
+    )
+
+
+# (p_w [Pa], rho_f [kg/m^3]) of the two-parameter snow: 16 x 16 points (rho_f in steps
+# of 67 kg/m^3).
+PIT_GRID = np.stack(
+    [
+        g.ravel()
+        for g in np.meshgrid(
+            np.geomspace(5e3, 300e3, 16), np.linspace(400.0, 1400.0, 16), indexing="ij"
+        )
+    ],
+    axis=1,
+)
+
+
+def _civ_tire(diameter, width):
+    """The CIV's front Michelin XCH4 as a `DeflectingTire`: p_i = 103 kPa (CRREL 95-7
+    Table 2), p_c = 0 and a section height of 0.75 b (assumptions: neither is in the
+    stored sources)."""
+    from .._wheel.tire import DeflectingTire
+
+    return DeflectingTire(diameter, width, CIV_SECTION_RATIO * width, CIV_INFLATION, 0.0)
+
+
 def _bekker_terrain(rows, grid, diameter):
     from .._terrain.bekker import BekkerSoil
 
@@ -148,13 +190,18 @@ def wheel_validation_model(
     *,
     wheel_load: float = DEFAULT_WHEEL_LOAD,
     tyre_width: float = DEFAULT_TYRE_WIDTH,
+    make_wheel: Callable | None = None,
+    fit_target: str = "sinkage",
     note: str = "",
 ) -> ValidationModel:
-    """The chapter-4 rigid wheel (`snowjax.solve_wheel`, towed: slip 0, classic shear) on any
+    """The chapter-4 wheel (`snowjax.solve_wheel`, towed: slip 0, classic shear) on any
     terrain: `make_terrain(rows, grid, diameter)` must return a `snowjax` terrain whose
-    leaves broadcast to `(n_rows, len(grid))` (or `(1, len(grid))`).  The parameter on
-    `grid` is fitted by leave-one-out to the measured sinkage.  Elements that neither
-    converge nor bottom out are NaN (and never chosen)."""
+    leaves broadcast to `(n_rows, len(grid))` (or `(1, len(grid))`); `make_wheel(diameter,
+    width)` the wheel (default `RigidWheel`; e.g. a `DeflectingTire`).  The parameter on
+    `grid` (1-D, or (G, k) for k parameters together) is fitted by leave-one-out to the
+    measured sinkage (`fit_target="sinkage"`), or to sinkage and R/W together ("both":
+    squared errors in units of `BOTH_SCALES`).  Elements that neither converge nor
+    bottom out are NaN (and never chosen)."""
 
     def evaluate(rows, grid):
         import jax.numpy as jnp
@@ -163,7 +210,7 @@ def wheel_validation_model(
         from .._wheel.geometry import RigidWheel
 
         diameter = 2 * float(rows["radius_m"][0])
-        wheel = RigidWheel(diameter=diameter, width=tyre_width)
+        wheel = (make_wheel or RigidWheel)(diameter, tyre_width)
         terrain = make_terrain(rows, grid, diameter)
         st = solve_wheel(wheel, terrain, jnp.asarray(wheel_load), jnp.asarray(0.0))
         status = np.asarray(st.status)
@@ -181,7 +228,7 @@ def wheel_validation_model(
         equations="rigid wheel, sinkage-vs-load equilibrium (4.14), resistance (4.16)",
         evaluate=evaluate,
         grid=np.asarray(grid),
-        fit_target="sinkage",
+        fit_target=fit_target,
         parameter=parameter,
         note=note,
     )
@@ -294,6 +341,42 @@ def validation_models(
             note="Table 4.1 ratios c/p_w = 0.2165, tan phi = 0.0787, K = D/73.6; p_w fitted",
         ),
         wheel_validation_model(
+            "tire_wong",
+            "deflecting tyre (103 kPa), Wong snow (z_w = h)",
+            _wong_terrain,
+            np.geomspace(2e3, 400e3, 81),
+            "p_w [Pa]",
+            wheel_load=w_n,
+            tyre_width=b,
+            make_wheel=_civ_tire,
+            note="DeflectingTire p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section "
+            "height 0.75 b (assumed); snow as the row above; p_w fitted",
+        ),
+        wheel_validation_model(
+            "wheel_wong_pit",
+            "chapter-4 wheel, Wong snow from depth and density, 2 parameters",
+            _wong_pit_terrain,
+            PIT_GRID,
+            "p_w [Pa], rho_f [kg/m^3]",
+            wheel_load=w_n,
+            tyre_width=b,
+            fit_target="both",
+            note="z_w = h (1 - rho0 / rho_f) (CRREL 95-7 eq. 1); Table 4.1 ratios; p_w and "
+            "rho_f fitted to sinkage and R/W together",
+        ),
+        wheel_validation_model(
+            "tire_wong_pit",
+            "deflecting tyre (103 kPa), Wong snow from depth and density, 2 parameters",
+            _wong_pit_terrain,
+            PIT_GRID,
+            "p_w [Pa], rho_f [kg/m^3]",
+            wheel_load=w_n,
+            tyre_width=b,
+            make_wheel=_civ_tire,
+            fit_target="both",
+            note="the tyre of the row above on the snow of the row above",
+        ),
+        wheel_validation_model(
             "wheel_bekker",
             "chapter-4 wheel, Bekker snow (unlimited depth)",
             _bekker_terrain,
@@ -331,20 +414,31 @@ def validation_models(
 # ----------------------------------------------------------------------------------------
 
 
-def _loo_from_grid(pred: np.ndarray, measured: np.ndarray):
-    """Held-out prediction of each row and the parameter index chosen without it."""
-    n, g = pred.shape
-    sq = (pred - measured[:, None]) ** 2
+# Error scales of a model fitted to both quantities (`fit_target="both"`): the sum of
+# squared errors in units of the targets of the tyre issue (sinkage RMS 10 mm, R/W RMS
+# 0.025), so that neither quantity dominates by its units.
+BOTH_SCALES = {"sinkage": 0.010, "coefficient": 0.025}
+
+
+def _loo_choice(sq: np.ndarray) -> np.ndarray:
+    """The grid index chosen for each held-out row i: least summed `sq` (n_rows, grid)
+    over the other rows.  A grid point where any training row has no (finite) prediction
+    is never chosen."""
+    n, g = sq.shape
     finite = np.isfinite(sq)
     sq0 = np.where(finite, sq, 0.0)
     total, n_bad = sq0.sum(axis=0), (~finite).sum(axis=0)
-    out, chosen = np.empty(n), np.empty(n, dtype=int)
+    chosen = np.empty(n, dtype=int)
     for i in range(n):
-        # a parameter value under which any training row has no prediction is never chosen
         train = np.where(n_bad - ~finite[i] > 0, np.inf, total - sq0[i])
-        k = int(np.argmin(train)) if g > 1 else 0
-        chosen[i], out[i] = k, pred[i, k]
-    return out, chosen
+        chosen[i] = int(np.argmin(train)) if g > 1 else 0
+    return chosen
+
+
+def _loo_from_grid(pred: np.ndarray, measured: np.ndarray):
+    """Held-out prediction of each row and the parameter index chosen without it."""
+    chosen = _loo_choice((pred - measured[:, None]) ** 2)
+    return pred[np.arange(len(pred)), chosen], chosen
 
 
 def _loo_mean(measured: np.ndarray) -> np.ndarray:
@@ -464,8 +558,19 @@ def validate(
                 pred, chosen = {}, None
                 if model.grid is not None:
                     assert model.fit_target is not None  # a grid model names its target
-                    fit = np.asarray(table[model.fit_target], dtype=float)
-                    _, chosen = _loo_from_grid(fit, measured[model.fit_target])
+                    targets = (
+                        tuple(BOTH_SCALES) if model.fit_target == "both" else (model.fit_target,)
+                    )
+                    scales = BOTH_SCALES if model.fit_target == "both" else {}
+                    sq = sum(
+                        (
+                            (np.asarray(table[q], dtype=float) - measured[q][:, None])
+                            / scales.get(q, 1.0)
+                        )
+                        ** 2
+                        for q in targets
+                    )
+                    chosen = _loo_choice(np.asarray(sq))
                 for q, t in table.items():
                     if t is None:
                         pred[q] = None
@@ -478,8 +583,11 @@ def validate(
                     continue
                 err = p - measured[q]
                 finite = np.isfinite(err)
-                grid_size = 0 if model.grid is None else len(model.grid)
                 params = None if chosen is None or model.grid is None else model.grid[chosen]
+                columns = None if params is None else params.reshape(len(params), -1)
+                grid_columns = (
+                    None if model.grid is None else model.grid.reshape(len(model.grid), -1)
+                )
                 metrics.append(
                     {
                         "model": model.key,
@@ -493,12 +601,23 @@ def validate(
                         "worst": float(np.max(np.abs(err[finite]))) if finite.any() else math.nan,
                         "bias": float(np.mean(err[finite])) if finite.any() else math.nan,
                         "parameter": model.parameter,
-                        "chosen_median": None if params is None else float(np.median(params)),
-                        "chosen_min": None if params is None else float(np.min(params)),
-                        "chosen_max": None if params is None else float(np.max(params)),
+                        # The first parameter's (the only one for a 1-D grid); every
+                        # parameter's median in `chosen_medians`.
+                        "chosen_median": None
+                        if columns is None
+                        else float(np.median(columns[:, 0])),
+                        "chosen_min": None if columns is None else float(np.min(columns[:, 0])),
+                        "chosen_max": None if columns is None else float(np.max(columns[:, 0])),
+                        "chosen_medians": None
+                        if columns is None
+                        else tuple(float(x) for x in np.median(columns, axis=0)),
                         "at_grid_edge": bool(
-                            params is not None
-                            and (np.any(chosen == 0) or np.any(chosen == grid_size - 1))
+                            columns is not None
+                            and grid_columns is not None
+                            and np.any(
+                                (columns == grid_columns.min(axis=0))
+                                | (columns == grid_columns.max(axis=0))
+                            )
                         ),
                     }
                 )
@@ -578,7 +697,13 @@ def metrics_table_markdown(metrics: list, models: list) -> str:
     """The RMS / worst-error table of [`snowjax.validate`][] as Markdown."""
     labels = {m.key: m.label for m in models}
     calib = {
-        m.key: (f"{m.parameter} (LOO on {m.fit_target})" if m.grid is not None else "none")
+        m.key: (
+            f"{m.parameter} (LOO on "
+            + ("sinkage and R/W" if m.fit_target == "both" else m.fit_target)
+            + ")"
+            if m.grid is not None
+            else "none"
+        )
         for m in models
     }
     by = {(r["model"], r["quantity"]): r for r in metrics}
@@ -592,7 +717,8 @@ def metrics_table_markdown(metrics: list, models: list) -> str:
         cal = calib.get(key, "")
         for r in (s, c):
             if r and r["chosen_median"] is not None:
-                cal += f"; median {_fmt(r['chosen_median'], 3)}"
+                medians = r.get("chosen_medians") or (r["chosen_median"],)
+                cal += f"; median {', '.join(_fmt(x, 3) for x in medians)}"
                 if r["at_grid_edge"]:
                     cal += " (grid edge)"
                 break
