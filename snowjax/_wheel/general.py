@@ -138,7 +138,7 @@ def _layer_width(modulus, radius, slope):
     return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
 
 
-def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=0.0):
+def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
     """Where the shear displacement (4.10) of a braked wheel changes sign inside the
     contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
     theta_star).
@@ -149,14 +149,16 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=0.0):
     lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
     left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
     (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
-    polynomials (faster to run, more code to compile) or XLA's.  `offset`: the root of
-    f - offset instead (a deflecting tyre's rear arc, whose travel the flat shortened).
+    polynomials (faster to run, more code to compile) or XLA's.  `offset` (None: 0): the
+    root of f - offset instead (a deflecting tyre's rear arc, whose travel the flat
+    shortened).
     """
     sin_theta0 = jnp.sin(theta0)
     theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
     # The front region (theta_r None) starts at lo = 0.
     lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
-    f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0) - offset
+    shift = (lambda f: f) if offset is None else (lambda f: f - offset)
+    f_lo = shift(_shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0))
     has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
 
     def newton(_, th):
@@ -165,7 +167,7 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=0.0):
             sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
         else:
             sin, cos = jnp.sin(th), jnp.cos(th)
-        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0) - offset
+        f = shift(_shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0))
         slope = _shear_displacement_slope(cos, slip)
         return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
 
