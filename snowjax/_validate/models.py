@@ -180,6 +180,9 @@ def validation_models(
     lab = BekkerSoil.thesis_lab_snow()
     w_n, b = wheel_load, tyre_width
 
+    def wheel_model(*args, **kwargs):  # the chapter-4 wheel at this load and width
+        return wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
+
     def n_rows(rows):
         return len(rows["row"])
 
@@ -260,60 +263,50 @@ def validation_models(
             richmond_measured,
             note="uses the measured sinkage as input: tests the resistance law alone",
         ),
-        wheel_validation_model(
+        wheel_model(
             "wheel_wong",
             "chapter-4 wheel, Wong snow (z_w = h)",
             _wong_terrain,
             np.geomspace(2e3, 400e3, 81),
             "p_w [Pa]",
-            wheel_load=w_n,
-            tyre_width=b,
             note="Table 4.1 ratios c/p_w = 0.2165, tan phi = 0.0787, K = D/73.6; p_w fitted",
         ),
-        wheel_validation_model(
+        wheel_model(
             "tire_wong",
             "deflecting tyre (103 kPa), Wong snow (z_w = h)",
             _wong_terrain,
             np.geomspace(2e3, 400e3, 81),
             "p_w [Pa]",
-            wheel_load=w_n,
-            tyre_width=b,
             make_wheel=_civ_tire,
             note="DeflectingTire p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section "
             "height 0.75 b (assumed); snow as the row above; p_w fitted",
         ),
-        wheel_validation_model(
+        wheel_model(
             "wheel_wong_pit",
             "chapter-4 wheel, Wong snow from depth and density, 2 parameters",
             _wong_pit_terrain,
             PIT_GRID,
             "p_w [Pa], rho_f [kg/m^3]",
-            wheel_load=w_n,
-            tyre_width=b,
             fit_target="both",
             note="z_w = h (1 - rho0 / rho_f) (CRREL 95-7 eq. 1); Table 4.1 ratios; p_w and "
             "rho_f fitted to sinkage and R/W together",
         ),
-        wheel_validation_model(
+        wheel_model(
             "tire_wong_pit",
             "deflecting tyre (103 kPa), Wong snow from depth and density, 2 parameters",
             _wong_pit_terrain,
             PIT_GRID,
             "p_w [Pa], rho_f [kg/m^3]",
-            wheel_load=w_n,
-            tyre_width=b,
             make_wheel=_civ_tire,
             fit_target="both",
             note="the tyre of the row above on the snow of the row above",
         ),
-        wheel_validation_model(
+        wheel_model(
             "wheel_bekker",
             "chapter-4 wheel, Bekker snow (unlimited depth)",
             _bekker_terrain,
             np.geomspace(0.1, 100.0, 61),
             "scale of (k_c, k_phi)",
-            wheel_load=w_n,
-            tyre_width=b,
             note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor",
         ),
         ValidationModel(

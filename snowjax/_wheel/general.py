@@ -203,13 +203,14 @@ def _tread_terms(theta, sin, cos, tread):
     )
 
 
-def _braking_split(theta0, theta_r, slip, radius, tread):
+def _braking_split(theta0, theta_r, slip, tread):
     """(angle, has_root): where a braked wheel's shear displacement changes sign.
 
     The rim's (`_shear_sign_change`).  A deflecting tyre's j equals the rim's on the entry
     arc (theta >= theta_f); on the flat it is linear in sin(theta),
     j = j(theta_f) + i r (sin theta_f - sin theta); on the rear arc (theta < -theta_f) it
-    is the rim's less r 2 (theta_f - sin theta_f).  The first root found, in that order.
+    is the rim's less r 2 (theta_f - sin theta_f).  The first root found, in that order
+    (all per r: the root does not depend on the radius).
     """
     split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
     if tread is None:
@@ -233,7 +234,7 @@ def _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution
     displacement (`_braking_split`; where there is none, the middle of the contact and no
     grading), the scale the width of the shear layer there."""
     r = diameter / 2
-    split, has_root = _braking_split(theta0, theta_r, slip, r, tread)
+    split, has_root = _braking_split(theta0, theta_r, slip, tread)
     split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
     z_split = _rim_sinkage_between(distribution.stress_angle(split, theta0, slip), theta0, diameter)
     k_split = terrain.rim_properties(z_split, width)[3]

@@ -23,9 +23,10 @@ mode the sinkage no longer grows with the load).  Here
 
     ln p_f = ln(p_i + p_c) - softplus(m [ln(p_i + p_c) - ln sigma(s)]) / m,
 
-a smooth minimum in log-pressure of sharpness m (`sharpness`, default 10: at
-sigma(s) = p_i + p_c the flat carries 2^(-1/m) = 0.93 of p_i + p_c; at half of it, the
-rigid rim's pressure is reduced by 1e-4 relative).  z_f = sigma^(-1)(p_f) (the
+a smooth minimum in log-pressure of sharpness m (`sharpness`, default 30: at
+sigma(s) = p_i + p_c the flat carries 2^(-1/m) = 0.977 of p_i + p_c; at half of it, the
+rigid rim's pressure is reduced by 0.5^m / m = 3e-11 relative; where sigma(s) is 1.4
+times p_i + p_c the flat carries p_i + p_c within 1.4e-6).  z_f = sigma^(-1)(p_f) (the
 terrain's `sinkage_at_pressure`) and delta = s - z_f follow, so every output is smooth
 (C-infinity) in the load, the pressures and every snow parameter, and the books' model
 is the limit m -> infinity.  As p_i -> infinity, p_f -> sigma(s) and the tyre is the
@@ -74,7 +75,7 @@ class DeflectingTire(AbstractWheel):
     - `carcass_pressure`: p_c [Pa], >= 0: the pressure the carcass stiffness adds to
       p_i on the contact (Wong's p_c; e.g. from the tyre's hard-surface contact area A
       at load W, p_c = W / A - p_i).
-    - `sharpness`: m [-], > 0, of the smooth switch between the modes (default 10).
+    - `sharpness`: m [-], > 0, of the smooth switch between the modes (default 30).
 
     With `inflation_pressure` large the tyre is `RigidWheel(diameter, width)` (to
     rounding, see the tests).  Every solver entry point that takes a wheel takes it;
