@@ -114,16 +114,16 @@ def normal_stress(
             + wheel.diameter * jnp.sin(jnp.asarray(theta) / 2) ** 2
         )
         return snow.pressure_at_clearance(height, wheel.width)
-    return _rim_stress_properties(theta, entry_angle, slip, wheel, snow, distribution)[0]
+    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
+    return _rim_stress_properties(theta, entry_angle, slip, wheel, snow, distribution, tread)[0]
 
 
-def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution):
+def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution, tread):
     """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain (a
-    deflecting tyre's flat at its sinkage)."""
+    deflecting tyre's flat, `tread`, at its sinkage)."""
     theta0 = jnp.asarray(entry_angle)
     stress_angle = distribution.stress_angle(jnp.asarray(theta), theta0, slip)
     z = _rim_sinkage_between(stress_angle, theta0, wheel.diameter)
-    tread = type(wheel).tread(wheel, theta0, terrain)
     if tread is not None:
         z = jnp.minimum(z, tread.sinkage)
     return terrain.rim_properties(z, wheel.width)
@@ -165,17 +165,17 @@ def shear_stress(
     law = _shear_law(shear)
     _check_model(wheel, snow, distribution, law)
     distribution = _as_distribution(distribution)
+    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
     if _closed_form_rule(snow, distribution, wheel):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
         c, tan_phi, k = snow.cohesion, snow.tan_phi, snow.shear_modulus
     else:
         sigma, c, tan_phi, k = _rim_stress_properties(
-            theta, entry_angle, slip, wheel, snow, distribution
+            theta, entry_angle, slip, wheel, snow, distribution, tread
         )
     if not law.mobilises:
         return jnp.zeros_like(sigma)
     j = shear_displacement(theta, entry_angle, slip, wheel.diameter)
-    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
     if tread is not None:
         theta = jnp.asarray(theta)
         j = j - wheel.radius * _tread_terms(theta, jnp.sin(theta), jnp.cos(theta), tread)[0]

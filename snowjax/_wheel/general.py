@@ -37,6 +37,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array
 
+from .distribution import _is_front
 from .geometry import (
     _rim_sinkage_between,
     _shear_displacement,
@@ -203,14 +204,15 @@ def _tread_terms(theta, sin, cos, tread):
     )
 
 
-def _braking_split(theta0, theta_r, slip, tread):
+def _braking_split(theta0, theta_r, slip, tread, rear=True):
     """(angle, has_root): where a braked wheel's shear displacement changes sign.
 
     The rim's (`_shear_sign_change`).  A deflecting tyre's j equals the rim's on the entry
     arc (theta >= theta_f); on the flat it is linear in sin(theta),
     j = j(theta_f) + i r (sin theta_f - sin theta); on the rear arc (theta < -theta_f) it
     is the rim's less r 2 (theta_f - sin theta_f).  The first root found, in that order
-    (all per r: the root does not depend on the radius).
+    (all per r: the root does not depend on the radius).  `rear` False: the contact has
+    no rear arc (the front region), which is then not searched.
     """
     split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
     if tread is None:
@@ -222,11 +224,13 @@ def _braking_split(theta0, theta_r, slip, tread):
     sin_root = jnp.sin(half) + j_f / jnp.where(slip < 0, slip, -1.0)
     on_flat = (slip < 0) & (sin_root > jnp.sin(lo)) & (sin_root < jnp.sin(half))
     flat_root = jnp.arcsin(jnp.clip(sin_root, -1.0, 1.0))
+    angle, found = jnp.where(on_arc, split, flat_root), on_arc | on_flat
+    if not rear:
+        return angle, found
     shortening = 2 * (half - jnp.sin(half))
-    rear, rear_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False, shortening)
-    on_rear = (theta_r is not None) & rear_root & (rear < -half)
-    angle = jnp.where(on_arc, split, jnp.where(on_flat, flat_root, rear))
-    return angle, on_arc | on_flat | on_rear
+    back, back_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False, shortening)
+    on_rear = back_root & (back < -half)
+    return jnp.where(found, angle, back), found | on_rear
 
 
 def _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution, tread):
@@ -234,7 +238,7 @@ def _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution
     displacement (`_braking_split`; where there is none, the middle of the contact and no
     grading), the scale the width of the shear layer there."""
     r = diameter / 2
-    split, has_root = _braking_split(theta0, theta_r, slip, tread)
+    split, has_root = _braking_split(theta0, theta_r, slip, tread, not _is_front(distribution))
     split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
     z_split = _rim_sinkage_between(distribution.stress_angle(split, theta0, slip), theta0, diameter)
     k_split = terrain.rim_properties(z_split, width)[3]
@@ -299,9 +303,12 @@ def general_contact(
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     if tread is not None:
-        # The flat's ends (the normal's direction turns there) and, in a rear region, the
-        # angle whose stress angle is the flat's front end (the sinkage's kink).
-        points += [(tread.half_angle, inf), (-tread.half_angle, inf)]
+        # The flat's ends (the normal's direction turns there; the rear end only where the
+        # contact extends behind the axle) and, in a rear region, the angle whose stress
+        # angle is the flat's front end (the sinkage's kink).
+        points.append((tread.half_angle, inf))
+        if not _is_front(distribution):
+            points.append((-tread.half_angle, inf))
         points += [(a, inf) for a in distribution.rear_angles(tread.half_angle, theta0, slip)]
     if braking and law.mobilises:
         points.append(

@@ -129,7 +129,10 @@ class DeflectingTire(AbstractWheel):
     def flat_pressure(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
         """p_f [Pa]: the pressure on the flat, the smooth minimum of the rigid rim's
         lowest-point pressure sigma(s) and p_i + p_c (module docstring)."""
-        s = max_sinkage(entry_angle, self.diameter)
+        return self._flat_pressure(max_sinkage(entry_angle, self.diameter), terrain)
+
+    def _flat_pressure(self, s, terrain):
+        """`flat_pressure` at the undeflected circle's lowest-point sinkage s [m]."""
         capacity = self.inflation_pressure + self.carcass_pressure
         rim = terrain.pressure(s, self.width)
         # ln sigma(s) kept finite: 0 at the surface, +inf on a base (Wong's law).
@@ -148,7 +151,7 @@ class DeflectingTire(AbstractWheel):
         """(z_f, delta) [m] at entry angle theta0."""
         s = max_sinkage(entry_angle, self.diameter)
         limit = jnp.minimum(s, terrain.depth)
-        pressure = self.flat_pressure(entry_angle, terrain)
+        pressure = self._flat_pressure(s, terrain)
         z_flat = type(terrain).sinkage_at_pressure(terrain, pressure, self.width, limit)
         return z_flat, jnp.maximum(s - z_flat, 0.0)
 
