@@ -51,8 +51,11 @@ def contact(
     z_f=None,
     lower=None,
     mobilisation=None,
+    epsrel=1e-13,
+    vertical_only=False,
 ):
-    """(W, R, T, M) by adaptive quadrature over theta_r .. theta0.
+    """(W, R, T, M) by adaptive quadrature over theta_r .. theta0 (relative tolerance
+    `epsrel`); the array (W,) alone if `vertical_only`.
 
     `lower` = (c, tan_phi, K) of the layer below the ice, used past the failure sinkage.
     `mobilisation(x)`: the factor g(j / K) of tau = (c + sigma tan phi) g (default the
@@ -112,12 +115,14 @@ def contact(
         tau,
     ]
     out = []
-    for fn in fns:
+    for fn in fns[:1] if vertical_only else fns:
         total = 0.0
         for lo, hi in zip(pts[:-1], pts[1:]):
             if hi > lo:
-                total += integrate.quad(fn, lo, hi, epsabs=0.0, epsrel=1e-13, limit=400)[0]
+                total += integrate.quad(fn, lo, hi, epsabs=0.0, epsrel=epsrel, limit=400)[0]
         out.append(total)
+    if vertical_only:
+        return np.array([out[0] * r * b])
     w, rr, t, m = out
     return np.array([w * r * b, rr * r * b, t * r * b, m * r * r * b])
 
@@ -133,12 +138,14 @@ def solve(load, slip, D, b, law, c, tan_phi, K, *args, depth=math.inf, shallowes
     if 2 * depth / D < 2:
         theta_max = min(theta_max, math.acos(1 - 2 * depth / D))
     args = (D, b, law, c, tan_phi, K, *args)
-    W = lambda th: contact(th, slip, *args, **kw)[0] - load  # noqa: E731
+    W = lambda th: contact(th, slip, *args, **kw, vertical_only=True)[0] - load  # noqa: E731
     lo, hi = 1e-4, theta_max * (1 - 1e-12)
     if shallowest:
+        # The first grid point past the load, W alone at a loose tolerance (only its sign
+        # is used; brentq below raises if the bracket were wrong).
+        scan = lambda th: contact(th, slip, *args, **kw, epsrel=1e-8, vertical_only=True)[0]  # noqa: E731
         grid = np.linspace(lo, hi, 1000)
-        vals = [W(t) for t in grid]
-        k = next(i for i, v in enumerate(vals) if v >= 0)
+        k = next(i for i, t in enumerate(grid) if scan(t) >= load)
         lo, hi = grid[k - 1], grid[k]
     theta0 = optimize.brentq(W, lo, hi, xtol=1e-15, rtol=1e-14)
     return theta0, contact(theta0, slip, *args, **kw)
