@@ -23,12 +23,13 @@ pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarn
 
 D, B, H = 0.736, 0.235, 0.176  # the thesis tyre's size (P235/75R15)
 CARCASS = 5e3  # p_c [Pa]
+FLEXING = 0.015  # f_h, the hard-surface rolling-resistance coefficient [-]
 SNOW = sj.WongSnow.thesis_fresh_snow()
 SOIL = sj.BekkerSoil.snow_us()
 
 
-def _tire(inflation, carcass=CARCASS, sharpness=30.0):
-    return sj.DeflectingTire(D, B, H, inflation, carcass, sharpness)
+def _tire(inflation, carcass=CARCASS, sharpness=30.0, flexing=0.0):
+    return sj.DeflectingTire(D, B, H, inflation, carcass, sharpness, flexing)
 
 
 def _reference_law(terrain):
@@ -59,16 +60,20 @@ SLIPS = (0.2, -0.2)
 @pytest.mark.parametrize("case", list(CASES))
 def test_equilibrium_matches_scipy_reference_and_the_stiff_limit_is_the_rim(case):
     """Entry angle and forces of both modes within 1e-7 of quad + brentq (measured: at
-    most 4.6e-13).  A last row, p_i = 1e12 Pa, is `RigidWheel`: within 1e-9 on the same
-    quadrature rule (measured at most 1.5e-13), within the rules' documented 1e-7 where
-    the rim takes Wong snow's closed-form rule (measured 4.7e-12)."""
+    most 4.6e-13), the motion resistance with the flexing resistance f_h p_f b l of the
+    reference's flat, l = 2 delta sqrt((D - delta) / (delta + 1e-9 D)) (the chord, made
+    linear below 1e-9 D), p_f its pressure (the law at its sinkage).  A last row, p_i = 1e12 Pa,
+    is `RigidWheel`: within 1e-9 on the same quadrature rule (measured at most 1.5e-13),
+    within the rules' documented 1e-7 where the rim takes Wong snow's closed-form rule
+    (measured 4.7e-12)."""
     terrain, wr, load, inflations = CASES[case]
     distribution = None if wr is None else sj.WongReece(*wr)
     p = np.append(inflations, 1e12)[:, None]
     slip = np.asarray(SLIPS)[None, :]
-    st = sj.solve_wheel(_tire(p), terrain, load, slip, distribution=distribution)
+    tire = _tire(p, flexing=FLEXING)
+    st = sj.solve_wheel(tire, terrain, load, slip, distribution=distribution)
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
-    deflection = np.asarray(_tire(p).deflection(st.entry_angle, terrain))
+    deflection = np.asarray(tire.deflection(st.entry_angle, terrain))
     assert deflection[:-1].min() < 1e-6 and deflection.max() > 0.01  # both modes covered
     law = _reference_law(terrain)
     depth = float(terrain.depth)
@@ -80,11 +85,14 @@ def test_equilibrium_matches_scipy_reference_and_the_stiff_limit_is_the_rim(case
                 load, i, D, B, law, *_strength(terrain), inflation + CARCASS, 30.0, fm, fr,
                 theta_max,
             )  # fmt: skip
+            z_f, delta, _ = ref.flat(theta0, D, B, law, inflation + CARCASS, 30.0)
+            chord = 2 * delta * math.sqrt((D - delta) / (delta + 1e-9 * D))
+            flexing = FLEXING * law(z_f, B) * B * chord
             np.testing.assert_allclose(st.entry_angle[a, k], theta0, rtol=1e-7)
-            np.testing.assert_allclose(st.motion_resistance[a, k], r, rtol=1e-7)
+            np.testing.assert_allclose(st.motion_resistance[a, k], r + flexing, rtol=1e-7)
             np.testing.assert_allclose(st.thrust[a, k], t, rtol=1e-7)
+            np.testing.assert_allclose(st.drawbar_pull[a, k], t - r - flexing, atol=1e-7 * r)
             np.testing.assert_allclose(st.torque[a, k], m, rtol=1e-7)
-            z_f = ref.flat(theta0, D, B, law, inflation + CARCASS, 30.0)[0]
             np.testing.assert_allclose(st.sinkage[a, k], z_f, rtol=1e-7)
     rigid = sj.solve_wheel(sj.RigidWheel(D, B), terrain, load, slip, distribution=distribution)
     closed_form = isinstance(terrain, sj.WongSnow) and wr is None
@@ -131,20 +139,22 @@ def test_infinitely_stiff_tire_under_a_slip_angle_is_the_rigid_wheel():
 def _outputs(x, terrain, slip=0.2):
     """(sinkage, R, drawbar pull, torque) of x = (p_i, p_c, load, snow parameter, tan phi)."""
     inflation, carcass, load, parameter, tan_phi = x
+    tire = _tire(inflation, carcass, flexing=FLEXING)
     if isinstance(terrain, sj.WongSnow):
         terrain = eqx.tree_at(lambda s: (s.p_w, s.tan_phi), terrain, (parameter, tan_phi))
     else:
         terrain = eqx.tree_at(lambda s: (s.k_phi, s.tan_phi), terrain, (parameter, tan_phi))
-    st = sj.solve_wheel(_tire(inflation, carcass), terrain, load, slip)
+    st = sj.solve_wheel(tire, terrain, load, slip)
     return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
 
 
 def test_gradients_match_central_differences_across_the_mode_boundary():
     """d(sinkage, R, DP, M) / d(p_i, p_c, load, p_w or k_phi, tan phi) by the implicit
-    function theorem, against central differences (step 1e-5 relative), from the rigid
+    function theorem (R and DP with the flexing resistance, whose sqrt(delta) must stay
+    differentiable as delta -> 0), against central differences (step 1e-5 relative), from the rigid
     mode (delta ~ 1e-8 m) through the switch to the elastic mode, compared as
-    elasticities (x / y) dy/dx (measured: the largest difference a tenth of the tolerance;
-    the elastic mode's
+    elasticities (x / y) dy/dx (measured: the largest difference 2.3e-6, explained at the
+    tolerance below, the others a tenth of the tolerance; the elastic mode's
     motion resistance hardly changes with the entry angle, and the quadrature resolves
     that small derivative to 4e-4 of itself).  Bekker soil at 1.5 kN: the books' boundary lies
     at p_i = 18.6 kPa, the smooth switch spans about 18-22 kPa; 15 kPa is deep in the
@@ -164,7 +174,11 @@ def test_gradients_match_central_differences_across_the_mode_boundary():
                 2 * step[k]
             )
         y = np.asarray(value(x))[:, None]
-        np.testing.assert_allclose(exact * x / y, central * x / y, rtol=1e-5, atol=2e-6)
+        # atol: at p_i = 50 kPa (delta 5e-14 m) the flexing resistance is 2.5e-7 N with
+        # elasticity -27 (about -m); a 1e-5 step moves delta by 1e-17 m, below what s - z_f
+        # resolves, so the central difference reads 0 where the exact elasticity of the
+        # drawbar pull (-2.9 N) is -2.3e-6.  At 25 kPa (delta 4e-6 m) both agree to 1e-7.
+        np.testing.assert_allclose(exact * x / y, central * x / y, rtol=1e-5, atol=4e-6)
 
 
 def _slope_jump(sharpness, spacing):
@@ -212,6 +226,10 @@ _solve_on_snow = jax.jit(lambda tire: sj.solve_wheel(tire, SNOW, 4000.0, 0.2))
         ({"carcass_pressure": -1.0}, "tire.carcass_pressure must be finite and >= 0 Pa"),
         ({"section_height": 0.4}, "tire.section_height / diameter must be finite and < 0.5"),
         ({"sharpness": 0.0}, "tire.sharpness must be finite and > 0"),
+        (
+            {"hard_surface_resistance": -0.01},
+            "tire.hard_surface_resistance must be finite and >= 0",
+        ),
     ],
 )
 def test_bad_tire_inputs_are_named_eagerly_and_invalid_under_jit(kwargs, message):
@@ -235,8 +253,8 @@ def test_the_simplified_shear_law_is_refused():
 def test_wheel_forces_of_a_simulation_step_are_the_tires_equilibrium():
     """`wheel_forces` (the step of both simulations and of `snowjax.mjx`) takes the tyre:
     at a forward speed well above the regularisation band its forces are the tyre's
-    equilibrium at the step's slip."""
-    tire = _tire(6e4)
+    equilibrium at the step's slip, its flexing resistance included."""
+    tire = _tire(6e4, flexing=FLEXING)
     speed, wheel_speed = 2.0, 2.0 / (0.8 * D / 2)  # slip 0.2
     f = sj.wheel_forces(speed, wheel_speed, 4000.0, tire, SNOW)
     st = sj.solve_wheel(tire, SNOW, 4000.0, f.slip)
@@ -246,6 +264,12 @@ def test_wheel_forces_of_a_simulation_step_are_the_tires_equilibrium():
     np.testing.assert_allclose(f.longitudinal_force, st.drawbar_pull, rtol=1e-9)
     np.testing.assert_allclose(f.resisting_torque, st.torque, rtol=1e-9)
     assert float(tire.deflection(st.entry_angle, SNOW)) > 0.01  # the elastic mode
+    stiff = eqx.tree_at(lambda t: t.hard_surface_resistance, tire, jnp.asarray(0.0))
+    without = sj.solve_wheel(stiff, SNOW, 4000.0, f.slip)
+    # In the elastic mode the flat's pressure is p_i + p_c within 1.4e-6.
+    flexing = FLEXING * (6e4 + CARCASS) * B * tire.flat_length(st.entry_angle, SNOW)
+    np.testing.assert_allclose(without.drawbar_pull - st.drawbar_pull, flexing, rtol=2e-6)
+    assert float(flexing) > 50.0
 
 
 def test_fit_wheel_recovers_the_carcass_pressure():

@@ -90,7 +90,9 @@ PIT_GRID = np.stack(
 def _civ_tire(diameter, width):
     """The CIV's front Michelin XCH4 as a `DeflectingTire`: p_i = 103 kPa (CRREL 95-7
     Table 2), p_c = 0 and a section height of 0.75 b (assumptions: neither is in the
-    stored sources)."""
+    stored sources), without flexing resistance (f_h = 0): Table 11's resistances are
+    "only the portion of the resistance due to the deformation of the terrain" (Shoop
+    2001, the text above the table), the vehicle's resistance on pavement subtracted."""
     from .._wheel.tire import DeflectingTire
 
     return DeflectingTire(diameter, width, CIV_SECTION_RATIO * width, CIV_INFLATION, 0.0)

@@ -428,7 +428,12 @@ def _contact_batch(
                 bulldozing,
                 tread,
             )
-        if vertical_only or sd is not None:
+        if vertical_only:
+            return out
+        flexing = type(wh).flexing_resistance(wh, tread)
+        if flexing is not None:  # the tyre's hysteresis, part of the motion resistance
+            out = (out[0], out[1] + flexing, *out[2:])
+        if sd is not None:
             return out
         return (*out, jnp.zeros_like(th), jnp.zeros_like(th))
 

@@ -21,11 +21,15 @@ class Tread(NamedTuple):
       -theta_f..theta_f of the undeflected circle); 0 for a rigid rim.
     - `sinkage`: z_f [m], the depth of the flat below the surface.
     - `cos_half_angle`: cos theta_f = 1 - delta / r, delta the deflection.
+    - `pressure`: p_f [Pa], the normal stress on the flat.
+    - `deflection`: delta [m], the flat's height above the undeflected circle's lowest point.
     """
 
     half_angle: Array
     sinkage: Array
     cos_half_angle: Array
+    pressure: Array
+    deflection: Array
 
 
 class AbstractWheel(eqx.Module):
@@ -42,6 +46,8 @@ class AbstractWheel(eqx.Module):
       `WheelState.sinkage` [m] (default the rim's, eq. 4.15);
     - `deepest_reach(depth)`: how deep the undeflected circle may sink on a base at that
       depth [m] (default: to the base);
+    - `flexing_resistance(tread)`: the resistance of the wheel's own deformation [N],
+      added to the motion resistance (default None: none, a rigid rim);
     - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
       metadata by default);
     - `reference()` (class method): a valid wheel of the kind, which stands in for
@@ -76,6 +82,11 @@ class AbstractWheel(eqx.Module):
         """The deepest the undeflected circle's lowest point may sink [m] on a base at
         `depth` [m] (the solver's cap on the entry angle): the base itself for a rim."""
         return depth
+
+    def flexing_resistance(self, tread: Tread | None) -> Array | None:
+        """The resistance of the wheel's own deformation [N] with the tread `tread`, added
+        to the motion resistance R (and so taken from the drawbar pull); None: none."""
+        return None
 
     def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range)."""

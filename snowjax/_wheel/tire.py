@@ -39,10 +39,38 @@ becomes j = (arc length of the tread from the entry) - (1 - i)(x_entry - x).  Th
 normal stress on the flat has a moment about the axle (arm x) and the shear stress
 acts at the flat's distance r - delta below the axle.
 
-Not modelled: the carcass's hysteresis (flexing) resistance, sidewall contact with the
-snow, and the tyre's growth of contact width with deflection (the width stays the
-section width b).  A deflection beyond the section height (the rim would reach the
-ground) is not flagged by a status; compare `deflection` with `section_height`.
+Flexing resistance.  Bekker (1969) and Wong (section 2.5) split a tyre's motion
+resistance on soft ground into the terrain's compaction (the stress integrals above)
+and the flexing (hysteresis) of the carcass, and take the latter from measurements of
+the tyre on a hard surface.  Here: a tyre whose rolling-resistance coefficient on a hard
+surface is f_h (`hard_surface_resistance`, default 0) loses, at the deflection delta it
+has on the soft ground, what it loses on a hard surface at that deflection,
+
+    R_f = f_h W_h(delta),    W_h(delta) = p_f b l,    l = D sin(theta_f),
+
+W_h the load that gives the deflection delta on a hard surface in this same model: the
+flat, l = 2 sqrt(delta (D - delta)) long, carrying p_f (= p_i + p_c in the elastic mode;
+p_f rather than p_i + p_c within the smooth switch keeps R_f of a very stiff tyre, whose
+delta is a rounding error, at the rounding level: it would otherwise grow with p_i).
+Deep in the rigid mode delta is a rounding error of s - z_f while its derivative is
+not, and sqrt(delta) would turn that into a wrong slope; so l is computed as
+2 delta sqrt((D - delta) / (delta + delta_0)), delta_0 = 1e-9 D, linear in delta below
+delta_0 (a rounding error then stays one) and within delta_0 / (2 delta) of the chord
+above it (4e-7 relative at a deflection of 1 mm).  Two
+assumptions are this package's, not the books': f_h does not change with the load, and
+the losses are equal at equal deflection.  R_f is added to the motion resistance R, so
+the drawbar pull is thrust - compaction - flexing (Wong's accounting); the vertical
+equilibrium and the torque are unchanged.  It vanishes in the rigid mode (delta -> 0),
+smoothly: with the smooth switch delta, and sqrt(delta), are C-infinity in every input.
+Measured snow
+resistances are often given net of the hard-surface rolling resistance (e.g. Shoop
+2001, Table 11: "only the portion of the resistance due to the deformation of the
+terrain"); compare those with f_h = 0.
+
+Not modelled: sidewall contact with the snow, and the tyre's growth of contact width
+with deflection (the width stays the section width b).  A deflection beyond the section
+height (the rim would reach the ground) is not flagged by a status; compare
+`deflection` with `section_height`.
 """
 
 from __future__ import annotations
@@ -57,6 +85,10 @@ from .._leaves import _as_float, parameter
 from .geometry import AbstractWheel, Tread, max_sinkage
 
 __all__ = ["DeflectingTire"]
+
+# delta_0 / D: below this deflection the flexing resistance's sqrt(delta) turns linear
+# (module docstring).
+_DELTA_0 = 1e-9
 
 
 class DeflectingTire(AbstractWheel):
@@ -76,6 +108,9 @@ class DeflectingTire(AbstractWheel):
       p_i on the contact (Wong's p_c; e.g. from the tyre's hard-surface contact area A
       at load W, p_c = W / A - p_i).
     - `sharpness`: m [-], > 0, of the smooth switch between the modes (default 30).
+    - `hard_surface_resistance`: f_h [-], >= 0: the tyre's coefficient of rolling
+      resistance on a hard surface, for its flexing resistance R_f = f_h p_f b l, l the
+      flat's length (`flat_length`; module docstring; default 0: none).
 
     With `inflation_pressure` large the tyre is `RigidWheel(diameter, width)` (to
     rounding, see the tests).  Every solver entry point that takes a wheel takes it;
@@ -110,6 +145,12 @@ class DeflectingTire(AbstractWheel):
         metadata=parameter(
             "-", "sharpness m of the rigid/elastic switch", lower=0.0, open_lower=True
         ),
+    )
+
+    hard_surface_resistance: Float[Array, "..."] = eqx.field(
+        converter=_as_float,
+        default=0.0,
+        metadata=parameter("-", "rolling-resistance coefficient on a hard surface f_h", lower=0.0),
     )
 
     deflects = True
@@ -148,22 +189,36 @@ class DeflectingTire(AbstractWheel):
         return self._flat(entry_angle, terrain)[1]
 
     def _flat(self, entry_angle, terrain):
-        """(z_f, delta) [m] at entry angle theta0."""
+        """(z_f [m], delta [m], p_f [Pa]) at entry angle theta0."""
         s = max_sinkage(entry_angle, self.diameter)
         limit = jnp.minimum(s, terrain.depth)
         pressure = self._flat_pressure(s, terrain)
         z_flat = type(terrain).sinkage_at_pressure(terrain, pressure, self.width, limit)
-        return z_flat, jnp.maximum(s - z_flat, 0.0)
+        return z_flat, jnp.maximum(s - z_flat, 0.0), pressure
 
     def tread(self, entry_angle, terrain) -> Tread:
         """The flat at entry angle theta0 [rad]: half-angle theta_f = 2 arcsin sqrt(delta
-        / D), its sinkage z_f and cos(theta_f) = 1 - 2 delta / D."""
-        z_flat, delta = self._flat(entry_angle, terrain)
+        / D), its sinkage z_f, cos(theta_f) = 1 - 2 delta / D, its pressure p_f and the
+        deflection delta."""
+        z_flat, delta, pressure = self._flat(entry_angle, terrain)
         ratio = delta / self.diameter
         positive = ratio > 0
         half_sin = jnp.sqrt(jnp.where(positive, ratio, 1.0))
         half_angle = jnp.where(positive, 2 * jnp.arcsin(jnp.minimum(half_sin, 1.0)), 0.0)
-        return Tread(half_angle, z_flat, 1 - 2 * ratio)
+        return Tread(half_angle, z_flat, 1 - 2 * ratio, pressure, delta)
+
+    def flat_length(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
+        """l = D sin(theta_f) [m]: the length of the flat at entry angle theta0 [rad]."""
+        return self.diameter * jnp.sin(self.tread(entry_angle, terrain).half_angle)
+
+    def flexing_resistance(self, tread: Tread | None) -> Array | None:
+        """R_f = f_h p_f b l [N], l = 2 delta sqrt((D - delta) / (delta + delta_0)): the
+        hard-surface rolling resistance at the deflection of `tread` (module docstring)."""
+        if tread is None:
+            return None
+        delta, d = tread.deflection, self.diameter
+        length = 2 * delta * jnp.sqrt((d - delta) / (delta + _DELTA_0 * d))
+        return self.hard_surface_resistance * tread.pressure * self.width * length
 
     def deepest_reach(self, depth) -> Array:
         """depth + h [m]: the undeflected circle may pass the base by the section height
