@@ -8,6 +8,7 @@ start with the module, so their compiles overlap the other tests.
 
 from __future__ import annotations
 
+import json
 import os
 import pathlib
 import re
@@ -574,3 +575,32 @@ def test_distributed_sweep_whose_peer_dies_ends_in_one_line(tmp_path):
     assert "run the same command again on every process to resume" in lines[0]
     # JAX's own report (and its stack trace) is kept in the log the line names.
     assert "distributed service" in (out / ".sweep.process0.log").read_text()
+
+
+def test_a_deflecting_tire_sweeps_like_solve_wheel(tmp_path):
+    """A `DeflectingTire` with two inflation pressures (one rigid mode, one elastic) and a
+    flexing resistance: the rows equal `solve_wheel`, the varying leaf is a column named
+    by its field, the wheel's type is part of the definition, and a bad leaf is named."""
+    inflation = np.array([3e5, 6e4])
+    tire = sj.DeflectingTire(0.736, 0.235, 0.176, inflation, 5e3, hard_surface_resistance=0.015)
+    snow = sj.WongSnow.thesis_fresh_snow()
+    slips = np.array([0.2, -0.2])
+    r = sj.sweep(tire, snow, 4000.0, slips, out=tmp_path / "s", chunk_size=C, progress=False)
+    assert r.n_points == 4
+    rows = sj.load_sweep(tmp_path / "s")
+    assert list(rows)[:5] == ["index", "param_set", "load", "slip", "inflation_pressure"]
+    np.testing.assert_array_equal(rows["inflation_pressure"], np.repeat(inflation, 2))
+    st = sj.solve_wheel(
+        sj.DeflectingTire(0.736, 0.235, 0.176, rows["inflation_pressure"], 5e3, 30.0, 0.015),
+        snow,
+        rows["load"],
+        rows["slip"],
+    )
+    for name in OUTPUTS:
+        np.testing.assert_allclose(rows[name], getattr(st, name), rtol=1e-12, err_msg=name)
+    np.testing.assert_array_equal(rows["status"], st.status)
+    manifest = json.loads((tmp_path / "s" / "manifest.json").read_text())
+    assert manifest["definition"]["wheel"] == "DeflectingTire"
+    bad = sj.DeflectingTire(0.736, 0.235, 0.176, np.array([1e5, 0.0]), 5e3)
+    with pytest.raises(ValueError, match="tire.inflation_pressure must be finite and > 0 Pa"):
+        sj.sweep(bad, snow, 4000.0, slips, out=tmp_path / "bad", chunk_size=C, progress=False)

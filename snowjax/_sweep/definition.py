@@ -18,11 +18,10 @@ from .._leaves import _get_path, _module_leaves, _parameter_names, _with_leaves
 from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel, RigidWheel
 
 MANIFEST = "manifest.json"
 _FORMAT_TAG = "snowjax-sweep/1"
-_WHEEL_FIELDS = ("diameter", "width")
 _OUTPUT_FIELDS = (
     "entry_angle",
     "sinkage",
@@ -46,6 +45,8 @@ _BLOCK = 1 << 20  # elements per block when validating or hashing list-mode inpu
 # ---------------------------------------------------------------------------------------
 
 _TERRAIN_WHAT = "a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow)"
+_WHEEL_WHAT = "a snowjax wheel (RigidWheel, DeflectingTire)"
+_RESERVED = ("index", "param_set", "load", "slip", *_OUTPUT_FIELDS, "status")
 
 
 def _leaf_arrays(obj, cls, what, kind=None):
@@ -90,8 +91,6 @@ def _rules():
     return {
         "load": (lambda x: x > 0, "> 0 N"),
         "slip": (lambda x: (x >= -1) & (x <= 1), "in [-1, 1]"),
-        "diameter": (lambda x: x > 0, "> 0 m"),
-        "width": (lambda x: x > 0, "> 0 m"),
     }
 
 
@@ -175,7 +174,8 @@ class _Definition:
     max_steps: int
     dtype: np.dtype
     version: str
-    terrain: Any  # template parameter sets (structure only; values come from inputs)
+    wheel: Any  # template parameter sets (structure only; values come from inputs)
+    terrain: Any
     distribution: Any
     names: dict[str, tuple[str, str]]  # column -> (owner, field path) of each leaf
 
@@ -186,7 +186,7 @@ class _Definition:
     @property
     def parameters(self) -> tuple[str, ...]:
         """Every parameter leaf, as column names: wheel, terrain, distribution."""
-        return _WHEEL_FIELDS + tuple(self.names)
+        return tuple(self.names)
 
     @property
     def varying(self) -> tuple[str, ...]:
@@ -230,10 +230,10 @@ class _Definition:
 
     def build(self, columns: dict[str, Any]):
         """(wheel, terrain, distribution) with their leaves taken from `columns`."""
-        wheel = RigidWheel(**{f: columns[f] for f in _WHEEL_FIELDS})
-        parts = {"terrain": {}, "distribution": {}}
+        parts = {"wheel": {}, "terrain": {}, "distribution": {}}
         for name, (owner, path) in self.names.items():
             parts[owner][path] = columns[name]
+        wheel = _with_leaves(self.wheel, parts["wheel"])
         terrain = _with_leaves(self.terrain, parts["terrain"])
         distribution = (
             None
@@ -261,6 +261,8 @@ class _Definition:
             "format": _FORMAT_TAG,
             "snowjax_version": self.version,
             "mode": "grid" if self.grid else "list",
+            # The wheel's type, except for the rigid wheel (its sweeps keep their hash).
+            **({} if isinstance(self.wheel, RigidWheel) else {"wheel": type(self.wheel).__name__}),
             "terrain": type(self.terrain).__name__,
             "distribution": (
                 None if self.distribution is None else type(self.distribution).__name__
@@ -317,7 +319,7 @@ def _define(
         raise ValueError(f"sweep: chunk_size must be a positive integer, got {chunk_size!r}")
     if isinstance(max_steps, bool) or int(max_steps) < 1:
         raise ValueError(f"sweep: max_steps must be a positive integer, got {max_steps!r}")
-    wheel_t, wheel_leaves = _leaf_arrays(wheel, RigidWheel, "wheel")
+    wheel_t, wheel_leaves = _leaf_arrays(wheel, AbstractWheel, "wheel", _WHEEL_WHAT)
     terrain_t, terrain_leaves = _leaf_arrays(snow, Terrain, "snow", _TERRAIN_WHAT)
     dist_t, dist_leaves = None, {}
     if isinstance(distribution, FrontRegion):  # the front region is spelled None in a sweep
@@ -328,14 +330,12 @@ def _define(
         _check_model(wheel_t, terrain_t, dist_t, shear)
     except ValueError as err:
         raise ValueError(f"sweep: {err}") from None
-    names = _parameter_names(
-        terrain_t,
-        dist_t,
-        reserved=("index", "param_set", "load", "slip", *_WHEEL_FIELDS, *_OUTPUT_FIELDS, "status"),
-    )
-    leaves = {f: wheel_leaves[f] for f in _WHEEL_FIELDS}
-    for name, (owner, path) in names.items():
-        leaves[name] = (terrain_leaves if owner == "terrain" else dist_leaves)[path]
+    # Wheel leaves by their field names (`diameter`, `inflation_pressure`), the terrain's
+    # and the distribution's after them (prefixed where a name is taken).
+    names = {p if p not in _RESERVED else f"wheel.{p}": ("wheel", p) for p in wheel_leaves}
+    names.update(_parameter_names(terrain_t, dist_t, reserved=(*_RESERVED, *names)))
+    owners = {"wheel": wheel_leaves, "terrain": terrain_leaves, "distribution": dist_leaves}
+    leaves = {name: owners[owner][path] for name, (owner, path) in names.items()}
     inputs = {"load": np.asarray(loads), "slip": np.asarray(slips), **leaves}
     for name in ("load", "slip"):
         x = inputs[name]
@@ -348,7 +348,7 @@ def _define(
             raise TypeError(f"sweep: {name} must be real numbers, got dtype {x.dtype}")
     dtype = np.dtype(jnp.result_type(float))
     rules = _rules()
-    for name in ("load", "slip", *_WHEEL_FIELDS):
+    for name in ("load", "slip"):
         x = inputs[name]
         ok, allowed = rules[name]
         flat = x.reshape(-1)
@@ -379,7 +379,9 @@ def _define(
                 f" leaf must have the same length (or length 1); got {lengths}"
             )
         shape = (next(iter(lengths.values()), 1),)
-    # The terrain's and the distribution's own validity rules (those of solve_wheel).
+    # The wheel's, the terrain's and the distribution's own validity rules (those of
+    # solve_wheel).
+    _check_parameter_sets(wheel_t, wheel_leaves, lambda w, _: w.constraints(), "", "wheel")
     _check_parameter_sets(
         terrain_t,
         terrain_leaves,
@@ -410,6 +412,7 @@ def _define(
         max_steps=int(max_steps),
         dtype=dtype,
         version=VERSION,
+        wheel=wheel_t,
         terrain=terrain_t,
         distribution=dist_t,
         names=names,

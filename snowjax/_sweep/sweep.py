@@ -69,7 +69,7 @@ from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
 from .._wheel.distribution import AbstractStressDistribution
-from .._wheel.geometry import RigidWheel
+from .._wheel.geometry import AbstractWheel
 from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .definition import (
@@ -343,7 +343,7 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
 
 
 def sweep(
-    wheel: RigidWheel | Sequence[RigidWheel],
+    wheel: AbstractWheel | Sequence[AbstractWheel],
     snow: Terrain | ContactModel | Sequence[Terrain],
     loads: Float[ArrayLike, " loads"],
     slips: Float[ArrayLike, " slips"],
@@ -373,8 +373,10 @@ def sweep(
 
     **Arguments:**
 
-    - `wheel`: `RigidWheel`, or a list of them.  Leaves may be scalars or 1-D arrays
-      (a leading batch of parameter sets).
+    - `wheel`: `RigidWheel` or `DeflectingTire` (or another `AbstractWheel`), or a
+      list of them of one type.  Leaves may be scalars or 1-D arrays (a leading batch of
+      parameter sets); their columns are named by their fields (`diameter`,
+      `inflation_pressure`, ...).
     - `snow`: the terrain: a `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
       `LayeredSnow`; SI leaves, see their docs), a list of terrains of one type, or a
       `ContactModel` (its shear law, distribution and nodes; then leave those out);
