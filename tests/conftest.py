@@ -44,20 +44,20 @@ jax.config.update("jax_enable_x64", True)
 # end and one worker idle meanwhile (958 worker-seconds in 508 s of wall time).  The
 # longest files go first (longest-processing-time-first scheduling), by their summed
 # test durations on 2 cores (2026-11-26, seconds, without the `slow` cases): properties
-# 190, mjx 86, sim 80, terrains 87, lateral 64, wheel 64, planar 56, single_wheel 48,
-# reproduce 38; deflecting_tire 60 (measured alone).  A file missing from the list keeps
-# its place after them.  The order also decides which files share a worker, and with
-# them the compiled programs reused.
+# 188, wheel 115, terrains 101, sim 84, lateral 71, deflecting_tire 57, mjx 55,
+# single_wheel 48, planar 43, reproduce 37.  A file missing from the list keeps its place
+# after them.  The order also decides which files share a worker, and with them the
+# compiled programs reused.
 _LONGEST_FIRST = (
     "test_properties.py",
-    "test_mjx.py",
-    "test_sim.py",
+    "test_wheel.py",
     "test_terrains.py",
+    "test_sim.py",
     "test_lateral.py",
     "test_deflecting_tire.py",
-    "test_wheel.py",
-    "test_planar.py",
+    "test_mjx.py",
     "test_single_wheel.py",
+    "test_planar.py",
     "test_reproduce.py",
 )
 

@@ -143,7 +143,7 @@ def solve(load, slip, D, b, law, c, tan_phi, K, *args, depth=math.inf, shallowes
     if shallowest:
         # The first grid point past the load, W alone at a loose tolerance (only its sign
         # is used; brentq below raises if the bracket were wrong).
-        scan = lambda th: contact(th, slip, *args, **kw, epsrel=1e-8, vertical_only=True)[0]  # noqa: E731
+        scan = lambda th: contact(th, slip, *args, **kw, epsrel=1e-5, vertical_only=True)[0]  # noqa: E731
         grid = np.linspace(lo, hi, 1000)
         k = next(i for i, t in enumerate(grid) if scan(t) >= load)
         lo, hi = grid[k - 1], grid[k]

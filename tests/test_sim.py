@@ -277,6 +277,10 @@ def test_torque_below_the_self_propelled_torque_only_creeps(steady):
     assert 0 < float(traj.speed[-1]) < EPS
 
 
+# `make test-all` (19 s of a worker, two compiles of its own): `make test` starts vmapped
+# batches from rest in `test_properties.py` (the coasting and driven vehicles) and
+# `test_planar.py` (the soft snow from rest), which the bug below broke too.
+@pytest.mark.slow
 def test_vmap_over_terrains_from_rest():
     """A batch of two snows from rest in one vmapped program equals the two runs (this
     raised in lineax while the damped Newton's Jacobian came from `jax.linearize`: NaN
