@@ -46,26 +46,24 @@ the tyre on a hard surface.  Here: a tyre whose rolling-resistance coefficient o
 surface is f_h (`hard_surface_resistance`, default 0) loses, at the deflection delta it
 has on the soft ground, what it loses on a hard surface at that deflection,
 
-    R_f = f_h W_h(delta),    W_h(delta) = p_f b l,    l = D sin(theta_f),
+    R_f = f_h W_h(delta),    W_h(delta) = p_f b l,    l = 2 sqrt(delta (D - delta)),
 
 W_h the load that gives the deflection delta on a hard surface in this same model: the
-flat, l = 2 sqrt(delta (D - delta)) long, carrying p_f (= p_i + p_c in the elastic mode;
-p_f rather than p_i + p_c within the smooth switch keeps R_f of a very stiff tyre, whose
-delta is a rounding error, at the rounding level: it would otherwise grow with p_i).
-Deep in the rigid mode delta is a rounding error of s - z_f while its derivative is
-not, and sqrt(delta) would turn that into a wrong slope; so l is computed as
-2 delta sqrt((D - delta) / (delta + delta_0)), delta_0 = 1e-9 D, linear in delta below
-delta_0 (a rounding error then stays one) and within delta_0 / (2 delta) of the chord
-above it (4e-7 relative at a deflection of 1 mm).  Two
-assumptions are this package's, not the books': f_h does not change with the load, and
-the losses are equal at equal deflection.  R_f is added to the motion resistance R, so
-the drawbar pull is thrust - compaction - flexing (Wong's accounting); the vertical
-equilibrium and the torque are unchanged.  It vanishes in the rigid mode (delta -> 0),
-smoothly: with the smooth switch delta, and sqrt(delta), are C-infinity in every input.
-Measured snow
-resistances are often given net of the hard-surface rolling resistance (e.g. Shoop
-2001, Table 11: "only the portion of the resistance due to the deformation of the
-terrain"); compare those with f_h = 0.
+flat, of length l (= D sin theta_f, `flat_length`), carrying p_f (= p_i + p_c in the
+elastic mode).  Two assumptions are this package's, not the books': f_h does not change
+with the load, and the losses are equal at equal deflection.  R_f is added to the motion
+resistance R, so the drawbar pull is thrust - compaction - flexing (Wong's accounting);
+the vertical equilibrium and the torque are unchanged.  Measured snow resistances are
+often given net of the hard-surface rolling resistance (e.g. Shoop 2001, Table 11: "only
+the portion of the resistance due to the deformation of the terrain"); compare those
+with f_h = 0.
+
+Two numerical choices keep R_f smooth and vanishing in the rigid mode.  Deep in the
+rigid mode delta is a rounding error of s - z_f, while its derivative is not: l is
+computed as 2 delta sqrt((D - delta) / (delta + delta_0)), delta_0 = 1e-9 D, linear in
+delta below delta_0 (so a rounding error stays one, and the slope is right) and within
+delta_0 / (2 delta) of the chord above it (4e-7 relative at 1 mm).  And W_h uses p_f,
+not p_i + p_c: with p_i -> infinity the latter would multiply that rounding error.
 
 Not modelled: sidewall contact with the snow, and the tyre's growth of contact width
 with deflection (the width stays the section width b).  A deflection beyond the section
