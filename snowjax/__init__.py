@@ -9,6 +9,7 @@ interaction* (MSc thesis, University of Alaska Fairbanks).  SI units throughout.
 from ._terrain.bekker import BekkerSoil as BekkerSoil
 from ._constants import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
 from ._terrain.layered import LayeredSnow as LayeredSnow
+from ._terrain.rut import Rut as Rut
 from ._terrain.reece import ReeceSoil as ReeceSoil
 from ._wheel.geometry import RigidWheel as RigidWheel
 from ._wheel.geometry import AbstractWheel as AbstractWheel

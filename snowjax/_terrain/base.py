@@ -182,6 +182,12 @@ class AbstractTerrain(eqx.Module):
     def reference(cls) -> "AbstractTerrain":
         """A valid parameter set of this kind (stands in for invalid batch elements)."""
 
+    def stand_in(self) -> "AbstractTerrain":
+        """A valid parameter set of this terrain's structure, which stands in for invalid
+        batch elements: `reference()` by default; a terrain that wraps another (`Rut`)
+        builds it around the other's."""
+        return type(self).reference()
+
 
 # `snowjax.Terrain`: the same class under its shorter public name.
 Terrain = AbstractTerrain

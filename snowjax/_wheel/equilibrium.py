@@ -409,7 +409,7 @@ def _safe_inputs(valid, wheel, terrain, distribution, load, slip):
     """Replace invalid elements by valid reference values so their (discarded) solve is finite."""
     pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
     wheel = jax.tree_util.tree_map(pick, wheel, type(wheel).reference())
-    terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).reference())
+    terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).stand_in(terrain))
     distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
     return wheel, terrain, distribution, pick(load, 5000.0), pick(slip, 0.2)
 

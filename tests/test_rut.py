@@ -1,0 +1,126 @@
+"""A wheel on a rut (`snowjax.Rut`): against the SciPy reference of the rigid wheel
+(`tests/reference_terrain.py`) on the rut's law written here from its equations; a rut of
+zero depth is the virgin terrain; a second wheel at the same load and a heavier one;
+gradients through the first wheel's sinkage into the second wheel's forces."""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+import snowjax as sj
+
+from . import reference_terrain as ref
+
+pytestmark = pytest.mark.filterwarnings("ignore::scipy.integrate.IntegrationWarning")
+
+WHEEL = sj.RigidWheel(0.736, 0.235)
+K_0, A_U = 1e6, 5e6  # unloading modulus k_u = k_0 + A_u z_u [Pa/m, Pa/m^2] (illustrative)
+SLIP = 0.2
+# (virgin terrain, distribution (c1, c2) or None, load [N])
+CASES = {
+    "wong-wong-reece": (sj.WongSnow.thesis_fresh_snow(), (0.43, 0.32), 4000.0),
+    "bekker-front": (sj.BekkerSoil.snow_us(), None, 1000.0),
+}
+
+
+def _law(terrain):
+    if isinstance(terrain, sj.WongSnow):
+        return ref.wong(float(terrain.p_w), float(terrain.z_w))
+    return ref.bekker(float(terrain.n), float(terrain.k_c), float(terrain.k_phi))
+
+
+def _rut_law(virgin, z_u, b_1):
+    """Thesis eq. 2.21 below z_u, the virgin law beyond, in the sinkage below the floor."""
+    p_u = virgin(z_u, b_1)
+    d = min(p_u / (K_0 + A_U * z_u), z_u)
+    floor = z_u - d
+
+    def law(z, b):
+        return virgin(z_u, b) * z / d if z < d else virgin(z + floor, b)
+
+    return law, d, floor
+
+
+@pytest.mark.parametrize("case", list(CASES))
+def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrain(case):
+    """Rows: the same load on the rut, 1.5 times the load on it, the same load on a rut
+    of zero depth.  Entry angle, motion resistance, drawbar pull and torque within 1e-7 of
+    quad + brentq on the rut's law; the zero-depth rut equals the virgin terrain within
+    1e-12 (measured: 1e-15 relative)."""
+    virgin, wr, load = CASES[case]
+    dist = None if wr is None else sj.WongReece(*wr)
+    first = sj.solve_wheel(WHEEL, virgin, load, SLIP, distribution=dist)
+    z_u = float(first.sinkage)
+    depths = jnp.array([z_u, z_u, 0.0])
+    loads = jnp.array([load, 1.5 * load, load])
+    rut = sj.Rut(virgin, depths, WHEEL.width, K_0, A_U)
+    st = sj.solve_wheel(WHEEL, rut, loads, SLIP, distribution=dist)
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    for field in ("entry_angle", "sinkage", "motion_resistance", "drawbar_pull", "torque"):
+        np.testing.assert_allclose(getattr(st, field)[2], getattr(first, field), rtol=1e-12)
+    c, tan_phi, k = (float(x) for x in (virgin.cohesion, virgin.tan_phi, virgin.shear_modulus))
+    law, d, floor = _rut_law(_law(virgin), z_u, float(WHEEL.width))
+    np.testing.assert_allclose(rut.floor_depth[0], floor, rtol=1e-12)
+    fm, fr = (0.0, 0.0) if wr is None else (wr[0] + wr[1] * SLIP, 0.0)
+    depth = float(virgin.depth) - floor
+    for row in (0, 1):
+        theta0, (w, r, t, m) = ref.solve(
+            float(loads[row]), SLIP, 0.736, 0.235, law, c, tan_phi, k, fm, fr, z_f=d, depth=depth
+        )
+        np.testing.assert_allclose(st.entry_angle[row], theta0, rtol=1e-7)
+        np.testing.assert_allclose(st.motion_resistance[row], r, rtol=1e-7)
+        np.testing.assert_allclose(st.drawbar_pull[row], t - r, rtol=1e-7, atol=1e-7 * r)
+        np.testing.assert_allclose(st.torque[row], m, rtol=1e-7)
+    # The same load: on Wong snow with this unloading modulus (rebound 98 mm of the
+    # 177 mm rut) the second wheel stays within the first one's rut (lowest point at
+    # 162 mm); on Bekker soil (rebound 8 mm) it sinks 46 mm further (see the README: a
+    # rigid wheel on a rut carries its load over a shorter arc).  On both its
+    # compaction resistance drops (by 27 % and 26 %).  The heavier wheel passes z_u
+    # into the virgin terrain.
+    total = np.asarray(st.sinkage) + float(rut.floor_depth[0])
+    if case.startswith("wong"):
+        assert total[0] < z_u
+    assert float(st.motion_resistance[0]) < 0.8 * float(first.motion_resistance)
+    assert total[1] > z_u and float(st.sinkage[1]) > d
+
+
+def test_gradients_flow_from_the_first_wheel_into_the_second():
+    """d(second wheel's sinkage, R, DP) / d(p_w, k_0, load) with the rut left by the first
+    wheel on the same snow (p_w moves both wheels), forward mode against central
+    differences (measured agreement 1e-8 relative)."""
+    snow = sj.WongSnow.thesis_fresh_snow()
+    dist = sj.WongReece(0.43, 0.32)
+
+    def second(x):
+        p_w, k_0, load = x
+        virgin = sj.WongSnow(p_w, snow.z_w, snow.cohesion, snow.tan_phi, snow.shear_modulus)
+        z_u = sj.solve_wheel(WHEEL, virgin, load, SLIP, distribution=dist).sinkage
+        rut = sj.Rut(virgin, z_u, WHEEL.width, k_0, A_U)
+        st = sj.solve_wheel(WHEEL, rut, load, SLIP, distribution=dist)
+        return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull])
+
+    x = np.array([float(snow.p_w), K_0, 4000.0])
+    exact = np.asarray(jax.jit(jax.jacfwd(second))(jnp.asarray(x)))
+    value = jax.jit(second)
+    for k in range(x.size):
+        h = 1e-5 * x[k]
+        step = np.zeros_like(x)
+        step[k] = h
+        central = (np.asarray(value(x + step)) - np.asarray(value(x - step))) / (2 * h)
+        scale = np.abs(np.asarray(value(x))) / x[k]
+        assert np.all(np.abs(exact[:, k]) > 1e-3 * scale)  # every input moves every output
+        np.testing.assert_allclose(exact[:, k], central, rtol=1e-5, atol=1e-9 * scale.max())
+
+
+def test_bad_rut_inputs_are_named():
+    snow = sj.WongSnow.thesis_fresh_snow()
+    with pytest.raises(ValueError, match="rut_sinkage must be finite and < the virgin base"):
+        sj.solve_wheel(WHEEL, sj.Rut(snow, 0.3, 0.235, K_0, A_U), 4000.0, SLIP)
+    with pytest.raises(ValueError, match="k_0 must be finite and > 0"):
+        sj.solve_wheel(WHEEL, sj.Rut(snow, 0.1, 0.235, 0.0, A_U), 4000.0, SLIP)
+    assert math.isfinite(float(sj.Rut(snow, 0.1, 0.235, K_0, A_U).floor_depth))
