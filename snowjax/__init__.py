@@ -49,6 +49,8 @@ from ._wheel.contact import shear_stress as shear_stress
 from ._wheel.equilibrium import Status as Status
 from ._wheel.equilibrium import WheelState as WheelState
 from ._wheel.equilibrium import solve_wheel as solve_wheel
+from ._wheel.passes import PassResult as PassResult
+from ._wheel.passes import multi_pass as multi_pass
 
 # --- tire (chapter 3) ---
 from ._tire.tire import TireCoefficients as TireCoefficients

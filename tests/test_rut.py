@@ -124,3 +124,33 @@ def test_bad_rut_inputs_are_named():
     with pytest.raises(ValueError, match="k_0 must be finite and > 0"):
         sj.solve_wheel(WHEEL, sj.Rut(snow, 0.1, 0.235, 0.0, A_U), 4000.0, SLIP)
     assert math.isfinite(float(sj.Rut(snow, 0.1, 0.235, K_0, A_U).floor_depth))
+
+
+def test_multi_pass_is_the_chain_of_ruts_and_equal_wheels_repeat_once_inside_the_rut():
+    """`multi_pass` on the thesis snow (Wong–Reece): equal 4 kN wheels, and 4 kN / 6 kN
+    alternating (a heavier rear axle); each pass equals `solve_wheel` on the `Rut` of the
+    deepest earlier pass, built here by hand (to 1e-12).  Equal wheels: the second stays
+    within the first one's rebound, so every later pass repeats it (measured: 177 mm then
+    162.5 mm, R 1,768 N then 1,290 N)."""
+    snow = sj.WongSnow.thesis_fresh_snow()
+    dist = sj.WongReece(0.43, 0.32)
+    loads = np.array([[4000.0] * 4, [4000.0, 6000.0, 4000.0, 6000.0]])
+    res = sj.multi_pass(WHEEL, snow, loads, SLIP, K_0, A_U, distribution=dist)
+    assert np.all(np.asarray(res.status) == sj.Status.CONVERGED)
+    for row in range(2):
+        deepest = 0.0
+        for k in range(4):
+            rut = sj.Rut(snow, deepest, WHEEL.width, K_0, A_U)
+            st = sj.solve_wheel(WHEEL, rut, loads[row, k], SLIP, distribution=dist)
+            total = float(st.sinkage + rut.floor_depth)
+            deepest = max(deepest, total)
+            np.testing.assert_allclose(res.sinkage[row, k], total, rtol=1e-12)
+            np.testing.assert_allclose(res.rut_depth[row, k], deepest, rtol=1e-12)
+            np.testing.assert_allclose(res.drawbar_pull[row, k], st.drawbar_pull, rtol=1e-12)
+    equal = np.asarray(res.sinkage[0])
+    assert equal[1] < equal[0]
+    np.testing.assert_allclose(equal[2:], equal[1], rtol=1e-12)
+    np.testing.assert_allclose(
+        res.motion_resistance[0, 2:], res.motion_resistance[0, 1], rtol=1e-12
+    )
+    assert float(res.rut_depth[1, 1]) > float(res.rut_depth[1, 0])  # the heavier wheel deepens it
