@@ -29,7 +29,7 @@ import warnings
 from collections.abc import Sequence
 
 from .._constants import VERSION
-from . import chapter2, chapter3, chapter3_forces, chapter4, terrain, tire_on_snow
+from . import chapter2, chapter3, chapter3_forces, chapter4, ruts, terrain, tire_on_snow
 from .output import cell, md_table, thin, write_csv
 from .spec import Context, FigureResult, FigureSpec, TableSpec
 
@@ -61,6 +61,7 @@ FIGURES: tuple[FigureSpec, ...] = (
     terrain.fig_terrains,
     tire_on_snow.fig_tire_on_snow,
     tire_on_snow.fig_deflecting_tire,
+    ruts.fig_ruts,
 )
 
 # Report sections that are tables, after the figures: one line per table.
