@@ -92,7 +92,7 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
 def test_gradients_flow_from_the_first_wheel_into_the_second():
     """d(second wheel's sinkage, R, DP) / d(p_w, k_0, load) with the rut left by the first
     wheel on the same snow (p_w moves both wheels), forward mode against central
-    differences (measured agreement 1e-8 relative)."""
+    differences (measured: 4e-9 relative at most)."""
     snow = sj.WongSnow.thesis_fresh_snow()
     dist = sj.WongReece(0.43, 0.32)
 
