@@ -45,6 +45,10 @@ from .base import AbstractTerrain
 
 __all__ = ["Rut"]
 
+# The earlier wheel's width [m] and k_0 [Pa/m], A_u [Pa/m^2] of the reference rut and of
+# the stand-in for invalid batch elements.
+_REFERENCE = (0.235, 5e6, 0.0)
+
 
 class Rut(AbstractTerrain):
     """Terrain compacted by an earlier wheel to the sinkage z_u, reloaded along the
@@ -142,8 +146,9 @@ class Rut(AbstractTerrain):
 
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """d, where reloading meets the virgin law, and the virgin law's own, shifted."""
-        floor = self.floor_depth
-        return (self.reloading_depth, *(z - floor for z in self.virgin.breakpoint_sinkages()))
+        d = self.reloading_depth
+        floor = self.rut_sinkage - d
+        return (d, *(z - floor for z in self.virgin.breakpoint_sinkages()))
 
     def constraints(self, shear: str = "classic"):
         own = [r for r in AbstractTerrain.constraints(self, shear) if "." not in r[0]]
@@ -159,10 +164,10 @@ class Rut(AbstractTerrain):
 
     def stand_in(self) -> "Rut":
         """A rut of zero depth in the virgin terrain's stand-in."""
-        return Rut(type(self.virgin).stand_in(self.virgin), 0.0, 0.235, 5e6, 0.0)
+        return Rut(type(self.virgin).stand_in(self.virgin), 0.0, *_REFERENCE)
 
     @classmethod
     def reference(cls) -> "Rut":
         from .wong import WongSnow
 
-        return cls(WongSnow.reference(), 0.05, 0.235, 5e6, 0.0)
+        return cls(WongSnow.reference(), 0.05, *_REFERENCE)
