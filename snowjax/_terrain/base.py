@@ -102,6 +102,13 @@ class AbstractTerrain(eqx.Module):
         """Sinkages [m] where the pressure–sinkage law has a kink or a jump (none)."""
         return ()
 
+    def pressure_rises(self) -> bool:
+        """Whether the pressure never falls as the sinkage grows (static).  Default: a
+        law without breakpoints; a law with breakpoints may drop at one (`LayeredSnow`'s
+        ice failure), so `solve_wheel`'s cold start scans it densely for the shallowest
+        equilibrium.  A law with kinks only (`Rut`) says True."""
+        return not self.breakpoint_sinkages()
+
     def front_rim_integrals(
         self,
         entry_angle: Float[ArrayLike, "..."],

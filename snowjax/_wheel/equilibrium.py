@@ -261,13 +261,13 @@ def _scan_grid(terrain, dtype):
     s^2 = S_MIN^2, 8 and S_MAX^2 = 16 (theta0 = the cap, e^-8 of it and 1e-7 of it): W is
     monotone except for a braked wheel's backward shear, so the grid only has to start
     Newton, by interpolating ln W linearly in s^2 (exact for a power law) inside the
-    interval that brackets the root.  For a law with breakpoints
-    (`AbstractTerrain.breakpoint_sinkages`: `LayeredSnow`, whose W(theta0) can fall after
+    interval that brackets the root.  For a law whose pressure can fall
+    (`AbstractTerrain.pressure_rises` False: `LayeredSnow`, whose W(theta0) can fall after
     the ice breaks), s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
     theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
     peak; a peak narrower than that can be missed (then a deeper root is returned).
     """
-    if terrain.breakpoint_sinkages():
+    if not terrain.pressure_rises():
         s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
         s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
     else:
