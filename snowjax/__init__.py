@@ -10,6 +10,7 @@ from ._terrain.bekker import BekkerSoil as BekkerSoil
 from ._constants import DEFAULT_SHEAR_MODULUS as DEFAULT_SHEAR_MODULUS
 from ._terrain.layered import LayeredSnow as LayeredSnow
 from ._terrain.rut import Rut as Rut
+from ._terrain.rut_map import RutMap as RutMap
 from ._terrain.reece import ReeceSoil as ReeceSoil
 from ._wheel.geometry import RigidWheel as RigidWheel
 from ._wheel.geometry import AbstractWheel as AbstractWheel
@@ -50,6 +51,10 @@ from ._wheel.equilibrium import Status as Status
 from ._wheel.equilibrium import WheelState as WheelState
 from ._wheel.equilibrium import solve_wheel as solve_wheel
 from ._wheel.passes import PassResult as PassResult
+from ._wheel.passes import PathResult as PathResult
+from ._wheel.passes import drive_path as drive_path
+from ._wheel.passes import Ruts as Ruts
+from ._wheel.passes import track_offset as track_offset
 from ._wheel.passes import multi_pass as multi_pass
 
 # --- tire (chapter 3) ---

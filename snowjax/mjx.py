@@ -116,6 +116,7 @@ from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import AbstractWheel, RigidWheel
 from ._wheel.model import ContactModel, _unpack_model
+from ._wheel.passes import Ruts, _in_tracks, _levels, track_offset
 from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
@@ -412,11 +413,24 @@ def _wheel_kinematics(m, d, wheels):
     speed = jnp.sum(velocity * heading, -1)
     lateral = jnp.sum(velocity * lateral_dir, -1)
     spin = jnp.sum(cvel[:, :3] * axle, -1)
-    return speed, lateral, spin, heading, axle
+    return speed, lateral, spin, heading, axle, velocity
 
 
-def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distribution):
-    speed, lateral, spin, heading, axle = _wheel_kinematics(m, d, wheels)
+def _rut_overlap(d, wheels, follows, velocity, spin, axle):
+    """Each wheel's overlap with its leader's rut (`Ruts`; 1 for a leader): positions and
+    velocities projected on the world's (x, y) plane (z up), the yaw rate the leader
+    body's angular velocity about z less its spin's share."""
+    b = np.asarray(wheels.body_ids)
+    lead = np.maximum(np.asarray(follows), 0)
+    yaw_rate = d.cvel[b][:, 2] - spin * axle[:, 2]
+    pos = d.xipos[b][:, :2]
+    offset = track_offset(pos[lead], pos, velocity[lead][:, :2], yaw_rate[lead])
+    overlap = jnp.clip(1 - offset / jnp.broadcast_to(wheels.wheel.width, offset.shape), 0, 1)
+    return jnp.where(np.asarray(follows) >= 0, overlap, 1.0)
+
+
+def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distribution, ruts):
+    speed, lateral, spin, heading, axle, velocity = _wheel_kinematics(m, d, wheels)
     dtype = speed.dtype
     load = jnp.broadcast_to(jnp.asarray(load, dtype), speed.shape)
     min_load = wheels.min_load.astype(dtype)
@@ -426,30 +440,47 @@ def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distri
     airborne = jnp.clip(load / min_load, 0.0, 1.0)  # lift-off: forces fade to 0
     solve_load = jnp.maximum(load, min_load)
 
+    n = wheels.num_wheels
+    follows = (-1,) * n if ruts is None else ruts.follows
+    overlap = None if ruts is None else _rut_overlap(d, wheels, follows, velocity, spin, axle)
+
     def forces(v, omega):
-        f = wheel_forces(
-            v,
-            omega,
-            solve_load,
-            wheels.wheel,
-            snow,
-            shear,
-            speed_eps=speed_eps,
-            initial_entry_angle=entry_angle,
-            distribution=distribution,
-        )
+        contact = ContactModel(snow, distribution, shear)
+
+        def solve(c, idx=slice(None)):
+            part = jax.tree.map(lambda x: x[idx] if jnp.ndim(x) == 1 else x, wheels.wheel)
+            hint = None if entry_angle is None else entry_angle[idx]
+            f = wheel_forces(
+                v[idx], omega[idx], solve_load[idx], part, c,
+                speed_eps=speed_eps, initial_entry_angle=hint,
+            )  # fmt: skip
+            return f, f.sinkage
+
+        if ruts is None:
+            f, _ = solve(contact)
+        else:
+            f = _in_tracks(ruts, follows, contact, wheels.wheel.width, overlap, solve)
         return (f.longitudinal_force, f.resisting_torque), f
 
-    # Each wheel's (F, M_w) depends on its own (v, omega) only: two forward-mode
-    # tangents give the 2 x 2 Jacobian of every wheel at once.  Vmapping the jvp over
-    # the two tangents traces (and runs) the equilibrium solve once, not twice.
-    def tangent(direction):
-        tv = jnp.full_like(speed, direction[0])
-        tw = jnp.full_like(spin, direction[1])
-        return jax.jvp(forces, (speed, spin), (tv, tw), has_aux=True)
+    # Each wheel's (F, M_w) depends on its own (v, omega) and, in a rut, on its leaders':
+    # two forward-mode tangents per level of wheels (leaders, their followers, ...) give
+    # the 2 x 2 diagonal block of every wheel at once.  Vmapping the jvp over the
+    # tangents traces (and runs) the equilibrium solves once.
+    level = _levels(follows)
+    masks = (level[None, :] == np.arange(level.max() + 1)[:, None]).astype(float)
+    basis = np.concatenate(
+        [np.kron(masks, np.ones((2, 1))), np.tile(np.eye(2), (len(masks), 1))], 1
+    )
 
-    basis = jnp.eye(2, dtype=speed.dtype)
-    _, ((dF_dv, dF_dw), (dM_dv, dM_dw)), f = jax.vmap(tangent, out_axes=(None, 0, None))(basis)
+    def tangent(row):
+        mask, direction = row[:n], row[n:]
+        return jax.jvp(
+            forces, (speed, spin), (mask * direction[0], mask * direction[1]), has_aux=True
+        )
+
+    _, jac, f = jax.vmap(tangent, out_axes=(None, 0, None))(jnp.asarray(basis, speed.dtype))
+    pick = lambda rows, axis: rows[2 * level + axis, np.arange(n)]  # noqa: E731
+    (dF_dv, dF_dw), (dM_dv, dM_dw) = ((pick(x, 0), pick(x, 1)) for x in jac)
     force = airborne * f.longitudinal_force
     torque = airborne * f.resisting_torque
     # Damping of the generalised snow force Q = J_v^T F - J_w^T M_w w.r.t. (v, omega):
@@ -491,6 +522,14 @@ def _snow_damping_matrix(m, d, wheels, damp, heading, axle):
     return jnp.einsum("kiv,kij,kjw->vw", g, damp, g)
 
 
+def _checked_ruts(ruts, n):
+    if ruts is None:
+        return None
+    if not isinstance(ruts, Ruts):
+        raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
+    return Ruts(ruts.k_0, ruts.a_u, ruts.layout(n))
+
+
 def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
     if not isinstance(m, mjx.Model):
         raise TypeError(f"m must be an mjx.Model (mjx.put_model), got {type(m).__name__}")
@@ -525,6 +564,7 @@ def step(
     shear: ShearModel | AbstractShearLaw = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
     distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
 ) -> tuple[mjx.Data, MjxWheelForces]:
     """One MJX time step with the snow's forces on the wheels; pure and differentiable.
 
@@ -553,6 +593,12 @@ def step(
     - `shear`, `speed_eps`, `distribution`: as in `snowjax.wheel_forces` (shear model;
       regularisation speed [m/s]; `None`, `FrontRegion()`, `WongReece` or another
       stress distribution).
+    - `ruts`: None (default: every wheel on virgin snow), or `snowjax.Ruts(k_0, a_u,
+      follows)`: the wheels run in the ruts of the wheels ahead, `follows` in
+      `MjxWheels` order (default: the last half behind the first half, as the shipped
+      vehicle's rear wheels behind its front wheels), each seeing the rut's depth times
+      its overlap with its leader's path (`snowjax.track_offset`, in the world's x-y
+      plane); a following wheel's `sinkage` is below its rut's floor.
 
     **Returns:** `(next mjx.Data, MjxWheelForces)`; its `xfrc_applied` holds the snow
     wrenches that were applied.
@@ -579,6 +625,7 @@ def step(
     n = wheels.num_wheels
     if entry_angle is not None:
         entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
+    ruts = _checked_ruts(ruts, n)
 
     d = mjx.fwd_position(m, d)
     d = mjx.sensor_pos(m, d)
@@ -594,6 +641,7 @@ def step(
         shear,
         float(speed_eps),
         distribution,
+        ruts,
     )
     b = np.asarray(wheels.body_ids)
     d = d.replace(xfrc_applied=d.xfrc_applied.at[b].set(wrench.astype(d.xfrc_applied.dtype)))
@@ -650,6 +698,7 @@ def rollout(
     shear: ShearModel | AbstractShearLaw = "classic",
     speed_eps: float = DEFAULT_SPEED_EPS,
     distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
 ) -> Rollout:
     """`num_steps` calls of `step` in one `jax.lax.scan`, the entry angles carried along.
 
@@ -691,6 +740,7 @@ def rollout(
             shear=shear,
             speed_eps=speed_eps,
             distribution=distribution,
+            ruts=ruts,
         )
         theta = jax.lax.stop_gradient(
             jnp.where(jnp.isfinite(out.entry_angle), out.entry_angle, theta)

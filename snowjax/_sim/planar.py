@@ -85,6 +85,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import AbstractWheel
+from .._wheel.passes import _in_tracks, track_offset
 from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
@@ -327,22 +328,50 @@ def _body_to_wheel(vehicle, u, v, r, steer):
     return c * vx_body + s * vy_body, -s * vx_body + c * vy_body
 
 
-def _planar_wheel_forces(vehicle, contact, u, v, r, omega, steer, speed_eps, guess, steps):
+def _rut_overlap(vehicle, u, v, r, follows):
+    """Each wheel's overlap with its leader's rut (1 for a leader), (..., 4): the
+    follower sees `clip(1 - |e| / b, 0, 1)` of the rut's depth, e its offset from the
+    leader's path about the instantaneous centre of rotation (`track_offset`)."""
+    pos = vehicle.wheel_positions
+    leaders = np.maximum(np.asarray(follows), 0)
+    lead = pos[leaders]
+    velocity = jnp.stack(
+        [u[..., None] - r[..., None] * lead[:, 1], v[..., None] + r[..., None] * lead[:, 0]], -1
+    )
+    offset = track_offset(lead, pos, velocity, r[..., None])
+    overlap = jnp.clip(1 - offset / vehicle.wheel.width, 0.0, 1.0)
+    return jnp.where(np.asarray(follows) >= 0, overlap, 1.0)
+
+
+def _planar_wheel_forces(
+    vehicle, contact, u, v, r, omega, steer, speed_eps, guess, steps, ruts=None
+):
     """Snow forces on the four wheels at body velocities (u, v, r) and spins omega, for a
-    `ContactModel` `contact`."""
+    `ContactModel` `contact`; with `ruts` (`Ruts`, layout resolved) the rear wheels run
+    in the front wheels' ruts (`_rut_overlap`)."""
     radius = vehicle.wheel.diameter / 2
     vx, vy = _body_to_wheel(vehicle, u, v, r, steer)
     kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
     slip, beta, direction, scale_x, scale_y, compaction = kinematics
-    st = solve_wheel(
-        vehicle.wheel,
-        contact,
-        vehicle.wheel_load,
-        slip,
-        slip_angle=beta,
-        max_steps=steps,
-        initial_entry_angle=guess,
-    )
+    load = vehicle.wheel_load
+
+    def solve(c, idx=slice(None)):
+        st = solve_wheel(
+            vehicle.wheel,
+            c,
+            load[idx],
+            slip[..., idx],
+            slip_angle=beta[..., idx],
+            max_steps=steps,
+            initial_entry_angle=None if guess is None else guess[..., idx],
+        )
+        return st, st.sinkage
+
+    if ruts is None:
+        st, _ = solve(contact)
+    else:
+        overlap = _rut_overlap(vehicle, u, v, r, ruts.follows)
+        st = _in_tracks(ruts, ruts.follows, contact, vehicle.wheel.width, overlap, solve)
     # The mirror image of a wheel travelling backwards is turned by 180 degrees about the
     # vertical: forces along the heading and the axle change sign, the moment about the
     # vertical does not.

@@ -28,6 +28,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
 from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.passes import Ruts
 from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
 from .planar import (
     NUM_WHEELS,
@@ -54,6 +55,7 @@ class _PlanarTerm(_WarmStartTerm):
     torque: Any
     speed_eps: float = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
+    ruts: Ruts | None = None
 
     def forces(self, t, y, hint):
         """(steer angles (4,) [rad], wheel forces) at time t [s] and state y (10,)."""
@@ -69,6 +71,7 @@ class _PlanarTerm(_WarmStartTerm):
             self.speed_eps,
             hint,
             self.max_wheel_steps,
+            self.ruts,
         )
         return steer, f
 
@@ -199,6 +202,7 @@ def simulate_planar(
     newton_steps: int = 100,
     wheel_max_steps: int = 5,
     distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
 ) -> PlanarTrajectory:
     """Simulate a four-wheel vehicle that steers on snow, in the plane; differentiable.
 
@@ -270,6 +274,11 @@ def simulate_planar(
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
       `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
       (scalar leaves).
+    - `ruts`: None (default: every wheel on virgin snow, as before), or `Ruts(k_0,
+      a_u)`: the rear wheels run in the front wheels' ruts, each seeing the rut's depth
+      times its overlap with the front wheel's path (`Ruts`, `track_offset`: a turning
+      vehicle's rear wheels leave the front ruts gradually).  A rear wheel's `sinkage`
+      is then measured below the floor of its rut.
 
     **Returns:** `PlanarTrajectory` with `1 + round(t1 / dt) // save_every` rows.
 
@@ -353,6 +362,10 @@ def simulate_planar(
         torque = jnp.asarray(torque, dtype)
     if not callable(steering):
         steering = jnp.asarray(steering, dtype)
+    if ruts is not None:
+        if not isinstance(ruts, Ruts):
+            raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
+        ruts = Ruts(ruts.k_0, ruts.a_u, ruts.layout(NUM_WHEELS))
     term = _PlanarTerm(
         vehicle=vehicle,
         contact=ContactModel(cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel),
@@ -360,6 +373,7 @@ def simulate_planar(
         torque=torque,
         speed_eps=float(speed_eps),
         max_wheel_steps=int(wheel_max_steps),
+        ruts=ruts,
     )
     if adjoint is None:
         adjoint = diffrax.RecursiveCheckpointAdjoint()

@@ -48,6 +48,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
 from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.passes import Ruts
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .levenberg_marquardt import _LevenbergMarquardt
 from .vehicle import (
@@ -95,6 +96,7 @@ class _VehicleTerm(_WarmStartTerm):
     torque: Any
     speed_eps: float = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
+    ruts: Ruts | None = None
 
     def forces(self, y, hint):
         """Wheel forces at state(s) y [..., n + 2] (warm start `hint`, or None)."""
@@ -107,6 +109,7 @@ class _VehicleTerm(_WarmStartTerm):
             self.speed_eps,
             hint,
             self.max_wheel_steps,
+            self.ruts,
         )
 
     def vf(self, t, y, args):
@@ -294,6 +297,7 @@ def simulate_longitudinal(
     nodes_per_panel: int | None = None,
     newton_steps: int = 100,
     distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
 ) -> Trajectory:
     """Simulate a vehicle driving straight on snow; differentiable end to end.
 
@@ -339,6 +343,10 @@ def simulate_longitudinal(
     - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
       `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
       (scalar leaves), passed to `solve_wheel`.
+    - `ruts`: None (default: every wheel on virgin snow, as before), or `Ruts(k_0,
+      a_u, follows)`: the wheels run in the ruts of the wheels ahead (by default the
+      last half behind the first half; `multi_pass`'s model at every instant).  A
+      following wheel's `sinkage` is then measured below the floor of its rut.
 
     **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.
 
@@ -397,12 +405,17 @@ def simulate_longitudinal(
     if not callable(torque):
         _check_concrete("torque", torque, lambda x: np.ones_like(x, bool), "[N m]")
         torque = jnp.asarray(torque, dtype)
+    if ruts is not None:
+        if not isinstance(ruts, Ruts):
+            raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
+        ruts = Ruts(ruts.k_0, ruts.a_u, ruts.layout(n))
     term = _VehicleTerm(
         vehicle=vehicle,
         contact=ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),
         torque=torque,
         speed_eps=float(speed_eps),
         max_wheel_steps=64,
+        ruts=ruts,
     )
     if adjoint is None:
         adjoint = diffrax.RecursiveCheckpointAdjoint()

@@ -94,6 +94,7 @@ from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _validate_eagerly
 from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.passes import _in_tracks
 from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
 
 __all__ = [
@@ -211,12 +212,27 @@ class WheelForces(eqx.Module):
     status: Int[Array, "..."]
 
 
-def _wheel_forces(speed, wheel_speed, load, wheel, contact, speed_eps, guess, steps):
-    """`WheelForces` for a `ContactModel` `contact` (checked inputs; `wheel_forces`)."""
+def _wheel_forces(speed, wheel_speed, load, wheel, contact, speed_eps, guess, steps, ruts=None):
+    """`WheelForces` for a `ContactModel` `contact` (checked inputs; `wheel_forces`);
+    with `ruts` (`Ruts`, its layout resolved), the wheels along the last axis run in
+    the ruts of the wheels ahead (straight ahead: full overlap)."""
     slip, direction, scale, compaction = _kinematics(
         speed, wheel_speed, wheel.diameter / 2, speed_eps
     )
-    st = solve_wheel(wheel, contact, load, slip, max_steps=steps, initial_entry_angle=guess)
+    if ruts is None:
+        st = solve_wheel(wheel, contact, load, slip, max_steps=steps, initial_entry_angle=guess)
+    else:
+        n = len(ruts.follows)
+        slips = jnp.broadcast_to(slip, (*slip.shape[:-1], n))
+
+        def solve(c, idx):
+            hint = None if guess is None else jnp.broadcast_to(guess, (n,))[idx]
+            st = solve_wheel(
+                wheel, c, load, slips[..., idx], max_steps=steps, initial_entry_angle=hint
+            )
+            return st, st.sinkage
+
+        st = _in_tracks(ruts, ruts.follows, contact, wheel.width, jnp.ones_like(slips), solve)
     return WheelForces(
         longitudinal_force=direction * scale * (st.thrust - compaction * st.motion_resistance),
         resisting_torque=direction * scale * st.torque,

@@ -150,6 +150,10 @@ class Rut(AbstractTerrain):
         floor = self.rut_sinkage - d
         return (d, *(z - floor for z in self.virgin.breakpoint_sinkages()))
 
+    def pressure_rises(self) -> bool:
+        """The reloading line rises, so the law rises where the virgin law does."""
+        return self.virgin.pressure_rises()
+
     def constraints(self, shear: str = "classic"):
         own = [r for r in AbstractTerrain.constraints(self, shear) if "." not in r[0]]
         shallower = self.rut_sinkage < self.virgin.depth

@@ -10,16 +10,20 @@ elastic rebound leaves the state as it was: the next identical wheel repeats it)
 from __future__ import annotations
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
+from .._leaves import _as_float, parameter
 from .._terrain.base import AbstractTerrain
 from .._terrain.rut import Rut
+from .._terrain.rut_map import RutMap, _check_modulus
 from .equilibrium import solve_wheel
 from .geometry import AbstractWheel
 from .shear_law import AbstractShearLaw, ShearModel
 
-__all__ = ["PassResult", "multi_pass"]
+__all__ = ["PassResult", "PathResult", "Ruts", "drive_path", "multi_pass", "track_offset"]
 
 
 class PassResult(eqx.Module):
@@ -70,11 +74,234 @@ def multi_pass(
     z_max = jnp.zeros(loads.shape[:-1], loads.dtype)
     rows = []
     for k in range(loads.shape[-1]):
-        rut = Rut(terrain, z_max, wheel.width, k_0, a_u)
+        # The first pass on the virgin terrain itself (a rut of zero depth is the same
+        # law, but the virgin law may offer closed forms: Wong snow's front region).
+        ground, floor = terrain, 0.0
+        if k > 0:
+            ground = Rut(terrain, z_max, wheel.width, k_0, a_u)
+            floor = ground.floor_depth
         st = solve_wheel(
-            wheel, rut, loads[..., k], slips[..., k], distribution=distribution, shear=shear
+            wheel, ground, loads[..., k], slips[..., k], distribution=distribution, shear=shear
         )
-        total = st.sinkage + rut.floor_depth
+        total = st.sinkage + floor
         z_max = jnp.maximum(z_max, total)
         rows.append((total, z_max, st.motion_resistance, st.drawbar_pull, st.torque, st.status))
     return PassResult(*(jnp.stack(column, axis=-1) for column in zip(*rows)))
+
+
+class Ruts(eqx.Module):
+    """Wheels of a vehicle running in the ruts of the wheels ahead of them (the
+    `ruts=` option of `simulate_longitudinal`, `simulate_planar` and `snowjax.mjx`).
+
+    The model is `multi_pass`'s, inside the vehicle and quasi-static: at every instant
+    a following wheel runs on the `Rut` whose depth is the deepest point below the
+    original surface its leader reaches now (the leader's own sinkage below its rut's
+    floor plus that floor, or the rut it runs in, whichever is deeper), i.e. the rut of
+    a leader in steady state (the time the snow takes from the leader to the follower,
+    wheelbase / speed, is not modelled).  Where the follower is offset sideways from its
+    leader's path (a turning vehicle; `track_offset`), it sees the rut's depth times the
+    overlap `clip(1 - |e| / b, 0, 1)` of the two wheel widths (e the offset, b the
+    width): the contact is split by the width-weighted mean depth of the snow under the
+    follower, not into a rut part and a virgin part (a documented simplification).
+
+    **Fields:**
+
+    - `k_0`: unloading modulus at zero sinkage [Pa/m], > 0 (`Rut`).
+    - `a_u`: its growth with the rut's depth [Pa/m^2], >= 0.
+    - `follows`: for each wheel, the index of the wheel whose rut it runs in, or -1 for
+      virgin snow (static; leaders before followers).  None (default): the simulation's
+      own layout (`simulate_planar`: rear left behind front left, rear right behind
+      front right; `simulate_longitudinal` with n = 2 m wheels: the last m behind the
+      first m, as two axles of m tracks; one wheel: virgin snow).
+    """
+
+    k_0: Float[Array, ""] = eqx.field(
+        converter=_as_float,
+        metadata=parameter(
+            "Pa/m", "unloading modulus at zero sinkage k_0", lower=0.0, open_lower=True, scale=1e6
+        ),
+    )
+    a_u: Float[Array, ""] = eqx.field(
+        converter=_as_float,
+        metadata=parameter("Pa/m^2", "growth A_u of the unloading modulus", lower=0.0, scale=1e7),
+    )
+    follows: tuple[int, ...] | None = eqx.field(static=True, default=None)
+
+    def layout(self, num_wheels: int) -> tuple[int, ...]:
+        """`follows`, or the default two-axle layout for `num_wheels` wheels; checked."""
+        follows = self.follows
+        if follows is None:
+            if num_wheels == 1:
+                follows = (-1,)
+            elif num_wheels % 2:
+                raise ValueError(
+                    f"Ruts(follows=None) needs an even number of wheels (two axles); got "
+                    f"{num_wheels}: give follows, one leader index (or -1) per wheel"
+                )
+            else:
+                m = num_wheels // 2
+                follows = (-1,) * m + tuple(range(m))
+        follows = tuple(int(j) for j in follows)
+        if len(follows) != num_wheels or any(not -1 <= j < k for k, j in enumerate(follows)):
+            raise ValueError(
+                f"Ruts.follows must give, for each of the {num_wheels} wheels, -1 or the index "
+                f"of a wheel before it; got {follows!r}"
+            )
+        _check_modulus(self.k_0, self.a_u)
+        return follows
+
+
+def track_offset(
+    leader: Float[ArrayLike, "... 2"],
+    follower: Float[ArrayLike, "... 2"],
+    velocity: Float[ArrayLike, "... 2"],
+    yaw_rate: Float[ArrayLike, "..."],
+) -> Float[Array, "..."]:
+    """|e| [m]: how far sideways a follower's path runs from its leader's, for a rigid
+    body moving in the plane (both points fixed on it).
+
+    Both paths are circles about the instantaneous centre of rotation c (straight lines
+    when the yaw rate is 0), and |e| = | |p_f - c| - |p_l - c| |, written so that it is
+    exact and finite as the yaw rate goes to 0, where it becomes the follower's distance
+    from the line through the leader along its velocity:
+
+        |e| = |r |d|^2 - 2 w.d| / (|r d - w| + |w|),   d = p_f - p_l,  w = z x v_l,
+
+    (r the yaw rate, v_l the leader's velocity).  0 at rest.
+
+    **Arguments:** `leader`, `follower`: positions (x, y) [m] in any frame fixed to the
+    body or the ground; `velocity`: the leader's velocity (v_x, v_y) [m/s] in the same
+    frame; `yaw_rate` r [rad/s], counter-clockwise positive.
+    """
+    d = jnp.asarray(follower) - jnp.asarray(leader)
+    v = jnp.asarray(velocity)
+    r = jnp.asarray(yaw_rate)
+    w = jnp.stack([-v[..., 1], v[..., 0]], -1)
+    numerator = r * jnp.sum(d * d, -1) - 2 * jnp.sum(w * d, -1)
+    denominator = jnp.linalg.norm(r[..., None] * d - w, axis=-1) + jnp.linalg.norm(w, axis=-1)
+    moving = denominator > 0
+    return jnp.where(moving, jnp.abs(numerator) / jnp.where(moving, denominator, 1.0), 0.0)
+
+
+def _levels(follows) -> np.ndarray:
+    """Each wheel's place in its track (0: a leader on virgin snow, 1: behind it, ...)."""
+    level = np.zeros(len(follows), int)
+    for k, j in enumerate(follows):
+        level[k] = 0 if j < 0 else level[j] + 1
+    return level
+
+
+def _in_tracks(ruts, follows, contact, width, overlap, solve):
+    """Solve the wheels of a vehicle level by level (leaders before followers), each
+    follower on the `Rut` its leader leaves (`Ruts`).
+
+    `solve(contact, idx)` solves the wheels `idx` (a NumPy index array into the last,
+    wheel axis) on `contact` and returns (a pytree of results with the wheel axis last,
+    their sinkage below the contact's surface).  `width` [m]: the wheels' widths,
+    broadcastable to (n,) (a rut's b_1 is its leader's); `overlap` [-]: each wheel's
+    overlap with its leader's rut, (..., n).  Returns the results of all wheels in wheel order.
+    """
+    follows = np.asarray(follows)
+    n = follows.size
+    level = _levels(follows)
+    width = jnp.broadcast_to(jnp.asarray(width), (n,))
+    depth: list = [None] * n  # the deepest point below the original surface per wheel
+    parts, order = [], []
+    for lv in range(level.max() + 1):
+        idx = np.flatnonzero(level == lv)
+        if lv == 0:
+            result, sinkage = solve(contact, idx)
+            total = sinkage
+        else:
+            seen = overlap[..., idx] * jnp.stack([depth[j] for j in follows[idx]], -1)
+            rut = Rut(contact.terrain, seen, width[follows[idx]], ruts.k_0, ruts.a_u)
+            result, sinkage = solve(eqx.tree_at(lambda c: c.terrain, contact, rut), idx)
+            total = jnp.maximum(sinkage + rut.floor_depth, seen)
+        for i, k in enumerate(idx):
+            depth[k] = total[..., i]
+        parts.append(result)
+        order.extend(idx)
+    inverse = np.argsort(np.asarray(order))
+    return jax.tree.map(lambda *xs: jnp.concatenate(xs, -1)[..., inverse], *parts)
+
+
+class PathResult(eqx.Module):
+    """Each step of `drive_path` (leading axis: steps; then wheels), and the final map.
+
+    - `sinkage`: the wheel's lowest point below the original surface [m].
+    - `rut_depth`: the rut depth the wheel saw (`RutMap.read`) [m].
+    - `motion_resistance`, `drawbar_pull` [N], `torque` [N m]: as `WheelState`'s.
+    - `status`: `Status` of each equilibrium.
+    - `rut_map`: the `RutMap` after the last step.
+    """
+
+    sinkage: Float[Array, "steps n"]
+    rut_depth: Float[Array, "steps n"]
+    motion_resistance: Float[Array, "steps n"]
+    drawbar_pull: Float[Array, "steps n"]
+    torque: Float[Array, "steps n"]
+    status: Int[Array, "steps n"]
+    rut_map: RutMap
+
+
+@eqx.filter_jit
+def drive_path(
+    wheel: AbstractWheel,
+    terrain: AbstractTerrain,
+    rut_map: RutMap,
+    positions: Float[ArrayLike, "steps n 2"],
+    headings: Float[ArrayLike, "steps n"],
+    loads: Float[ArrayLike, "*steps n"],
+    slip: Float[ArrayLike, "*steps n"],
+    *,
+    lookahead: float | None = None,
+    distribution=None,
+    shear: ShearModel | AbstractShearLaw = "classic",
+) -> PathResult:
+    """n wheels driven along prescribed paths over a `RutMap` (a test rig, a kinematic
+    vehicle, a convoy), each step: read the rut ahead of every wheel, solve its
+    equilibrium on that `Rut` (quasi-static, `solve_wheel`, warm-started from the last
+    step), mark the map with the depth it reached.  One `jax.lax.scan`; jitted;
+    differentiable (forward and reverse mode) in the terrain, the wheel, the loads, the
+    slips, the map and the positions; vmap it over environments.
+
+    **Arguments:**
+
+    - `wheel`, `terrain`: every wheel's (`RigidWheel`, `DeflectingTire`, ...) and the
+      virgin terrain (any law).
+    - `rut_map`: the map before the first step (`RutMap.empty`, or an earlier result's).
+    - `positions`: each wheel's centre (x, y) [m] at every step, (steps, n, 2); the
+      first row only places the wheels (nothing is marked before it).
+    - `headings`: each wheel's heading [rad] at every step, (steps, n).
+    - `loads`: F_z [N] and `slip`: driving slip [-], (n,) or (steps, n).
+    - `lookahead`: how far ahead of the axle the rut is read [m] (default the wheel's
+      radius, the farthest the contact can reach).
+    - `distribution`, `shear`: as in `solve_wheel`.
+
+    **Returns:** `PathResult`.
+    """
+    positions = jnp.asarray(positions, float)
+    steps, n = positions.shape[:2]
+    headings = jnp.broadcast_to(jnp.asarray(headings, positions.dtype), (steps, n))
+    loads = jnp.broadcast_to(jnp.asarray(loads, positions.dtype), (steps, n))
+    slips = jnp.broadcast_to(jnp.asarray(slip, positions.dtype), (steps, n))
+    width = jnp.broadcast_to(wheel.width, (n,))
+    ahead = jnp.max(wheel.diameter) / 2 if lookahead is None else lookahead
+
+    def step(carry, row):
+        grid, previous, hint = carry
+        position, heading, load, s = row
+        seen = grid.read(position, heading, width, ahead)
+        rut = Rut(terrain, seen, width, grid.k_0, grid.a_u)
+        st = solve_wheel(
+            wheel, rut, load, s, distribution=distribution, shear=shear, initial_entry_angle=hint
+        )
+        total = jnp.maximum(st.sinkage + rut.floor_depth, seen)
+        grid = grid.mark(previous, position, width, total)
+        hint = jax.lax.stop_gradient(jnp.where(jnp.isfinite(st.entry_angle), st.entry_angle, hint))
+        out = (total, seen, st.motion_resistance, st.drawbar_pull, st.torque, st.status)
+        return (grid, position, hint), out
+
+    start = (rut_map, positions[0], jnp.full((n,), jnp.nan, positions.dtype))
+    (final, *_), out = jax.lax.scan(step, start, (positions, headings, loads, slips))
+    return PathResult(*out, rut_map=final)
