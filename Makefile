@@ -35,6 +35,7 @@ test-all: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py $(ARGS)
 	$(BIN)/python benchmarks/mjx.py $(ARGS)
+	$(BIN)/python benchmarks/ruts.py $(ARGS)
 
 robustness: $(STAMP)
 	$(BIN)/python benchmarks/robustness.py $(ARGS)

@@ -62,6 +62,7 @@ FIGURES: tuple[FigureSpec, ...] = (
     tire_on_snow.fig_tire_on_snow,
     tire_on_snow.fig_deflecting_tire,
     ruts.fig_ruts,
+    ruts.fig_rut_map,
 )
 
 # Report sections that are tables, after the figures: one line per table.
