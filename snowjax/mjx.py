@@ -116,7 +116,7 @@ from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import AbstractWheel, RigidWheel
 from ._wheel.model import ContactModel, _unpack_model
-from ._wheel.passes import Ruts, _in_tracks, _levels, track_offset
+from ._wheel.passes import Ruts, _in_tracks, _levels, _overlap, track_offset
 from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
@@ -425,7 +425,8 @@ def _rut_overlap(d, wheels, follows, velocity, spin, axle):
     yaw_rate = d.cvel[b][:, 2] - spin * axle[:, 2]
     pos = d.xipos[b][:, :2]
     offset = track_offset(pos[lead], pos, velocity[lead][:, :2], yaw_rate[lead])
-    overlap = jnp.clip(1 - offset / jnp.broadcast_to(wheels.wheel.width, offset.shape), 0, 1)
+    width = jnp.broadcast_to(wheels.wheel.width, offset.shape)
+    overlap = _overlap(offset, width, width[lead])
     return jnp.where(np.asarray(follows) >= 0, overlap, 1.0)
 
 

@@ -56,9 +56,12 @@ _LONGEST_FIRST = (
     "test_lateral.py",
     "test_deflecting_tire.py",
     "test_mjx.py",
+    "test_rut_vehicles.py",
     "test_single_wheel.py",
     "test_planar.py",
     "test_reproduce.py",
+    "test_rut.py",
+    "test_rut_map.py",
 )
 
 

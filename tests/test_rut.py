@@ -154,3 +154,26 @@ def test_multi_pass_is_the_chain_of_ruts_and_equal_wheels_repeat_once_inside_the
         res.motion_resistance[0, 2:], res.motion_resistance[0, 1], rtol=1e-12
     )
     assert float(res.rut_depth[1, 1]) > float(res.rut_depth[1, 0])  # the heavier wheel deepens it
+
+
+def test_a_tyre_and_a_slip_angle_on_a_rut():
+    """A `DeflectingTire` on a rut: stiff (p_i = 1e12 Pa) it is the rim on the rut within
+    1e-9; at 100 kPa it flattens and sinks less.  Under a slip angle on the rut: beta = 0
+    is straight running (1e-7, the any-terrain quadrature against the straight one), and
+    the lateral force is odd in beta and resists the side-slip."""
+    snow = sj.WongSnow.thesis_fresh_snow()
+    rut = sj.Rut(snow, 0.15, WHEEL.width, K_0, A_U)
+    rim = sj.solve_wheel(WHEEL, rut, 4000.0, SLIP)
+    tyres = sj.DeflectingTire(0.736, 0.235, 0.176, jnp.array([1e12, 100e3]))
+    tyre = sj.solve_wheel(tyres, rut, 4000.0, SLIP)
+    assert np.all(np.asarray(tyre.status) == sj.Status.CONVERGED)
+    for field in ("sinkage", "motion_resistance", "drawbar_pull", "torque"):
+        np.testing.assert_allclose(getattr(tyre, field)[0], getattr(rim, field), rtol=1e-9)
+    assert float(tyre.sinkage[1]) < 0.9 * float(rim.sinkage)
+    beta = jnp.deg2rad(jnp.array([0.0, 5.0, -5.0]))
+    side = sj.solve_wheel(WHEEL, rut, 4000.0, SLIP, slip_angle=beta)
+    assert np.all(np.asarray(side.status) == sj.Status.CONVERGED)
+    for field in ("sinkage", "motion_resistance", "drawbar_pull", "torque"):
+        np.testing.assert_allclose(getattr(side, field)[0], getattr(rim, field), rtol=1e-7)
+    np.testing.assert_allclose(side.lateral_force[1], -side.lateral_force[2], rtol=1e-9)
+    assert float(side.lateral_force[1]) > 0.02 * 4000.0

@@ -76,15 +76,70 @@ def test_track_offset_is_the_difference_of_the_radii_about_the_turning_centre():
     # Straight: the follower's distance from the leader's line of motion; at rest 0.
     np.testing.assert_allclose(sj.track_offset([0.0, 0.0], [-2.0, 0.3], [1.5, 0.0], 0.0), 0.3)
     assert float(sj.track_offset([0.0, 0.0], [-2.0, 0.3], [0.0, 0.0], 0.0)) == 0.0
+    # The share of a follower's width over its leader's rut (offset, width, rut width):
+    # equal widths, a narrower wheel inside, a wider one, one beside the rut.
+    overlap = sj._wheel.passes._overlap
+    cases = [(0.05, 0.2, 0.2, 0.75), (0.02, 0.1, 0.3, 1.0), (0.0, 0.4, 0.2, 0.5),
+             (0.1, 0.4, 0.2, 0.5), (0.25, 0.2, 0.4, 0.25), (0.5, 0.2, 0.2, 0.0)]  # fmt: skip
+    for offset, width, rut, share in cases:
+        np.testing.assert_allclose(overlap(offset, width, rut), share, rtol=1e-12)
 
 
+MASS = 4 * LOAD / 9.80665
+PLANAR = sj.PlanarVehicle(MASS, MASS * (2.5**2 + 1.5**2) / 12, 1.5, WHEEL, 2.5, 1.5)
+
+
+def test_planar_wheel_forces_put_the_rear_wheels_in_the_front_ruts():
+    """The planar simulation's force function with `Ruts` at three states (one vmapped
+    solve): driving straight at slips 0.2 / 0.1, the rear wheels are `multi_pass`'s
+    second pass; turning at 1.5 m/s with yaw rates giving 40 % and 0 % overlap (offsets
+    of the rear wheels' paths from the front wheels', `track_offset`), the rear wheels
+    under their slip angles see that share of the rut, and none on virgin snow."""
+    from snowjax._sim.planar import _planar_wheel_forces, _rut_overlap
+
+    radius = float(WHEEL.diameter) / 2
+    u = jnp.array([2.0, 1.5, 1.5])
+    r = jnp.array([0.0, 0.06, 0.5])  # [rad/s]: straight, radius 25 m, 3 m
+    steer = jax.vmap(PLANAR.steer_angles)(jnp.arctan(2.5 * r / u))  # Ackermann, (3, 4)
+    omega = jnp.stack([u / (0.8 * radius)] * 2 + [u / (0.9 * radius)] * 2, -1)
+    ruts = sj.Ruts(RUTS.k_0, RUTS.a_u, (-1, -1, 0, 1))
+    contact = sj.ContactModel(SNOW, None, "classic", sj.Lateral())
+    v = 1.25 * r  # the centre of gravity's side speed with the rear axle on the radius
+
+    @jax.jit
+    def forces(u, v, r, omega, steer):
+        return _planar_wheel_forces(PLANAR, contact, u, v, r, omega, steer, 0.05, None, 64, ruts)
+
+    f = jax.vmap(forces)(u, v, r, omega, steer)
+    assert np.all(np.asarray(f.status) == Status.CONVERGED)
+    overlap = np.asarray(_rut_overlap(PLANAR, u, v, r, (-1, -1, 0, 1)))
+    np.testing.assert_allclose(overlap[0], 1.0, atol=1e-12)
+    assert 0.2 < overlap[1, 2] < 0.8 and overlap[2, 2] == 0.0
+    _rear_follows_multi_pass(
+        [LOAD, LOAD],
+        np.asarray(f.slip[0, ::2]),
+        float(f.drawbar_pull[0, 2]),
+        float(f.resisting_torque[0, 2]),
+        float(f.sinkage[0, 2]),
+        float(f.sinkage[0, 0]),
+    )
+    # Turning: each rear wheel on the rut of its front wheel's depth times its overlap
+    # (in the sharp turn a rut of zero depth: the virgin law, `test_rut.py`).
+    depth = overlap[1:, 2:] * np.asarray(f.sinkage[1:, :2])
+    rut = sj.Rut(SNOW, depth, WHEEL.width, RUTS.k_0, RUTS.a_u)
+    rear = sj.solve_wheel(WHEEL, rut, LOAD, f.slip[1:, 2:], slip_angle=f.slip_angle[1:, 2:])
+    np.testing.assert_allclose(f.drawbar_pull[1:, 2:], rear.drawbar_pull, rtol=1e-7)
+    np.testing.assert_allclose(f.lateral_force[1:, 2:], rear.lateral_force, rtol=1e-7)
+    assert np.all(depth[0] > 0.2 * np.asarray(f.sinkage[1, :2])) and np.all(depth[1] == 0)
+
+
+@pytest.mark.slow
 def test_planar_rear_wheels_follow_the_front_ruts_and_leave_them_in_a_turn():
     """Straight (delta = 0), a gentle turn (0.1 rad) and a sharp one (0.3 rad) at 300 N m
     per wheel from 1.5 m/s for 2 s (one vmapped program): straight, the rear wheels are
     `multi_pass`'s second pass; in the sharp turn their offset exceeds the wheel's width
     and they run on virgin snow (`solve_wheel` with their slip angle)."""
-    mass = 4 * LOAD / 9.80665
-    vehicle = sj.PlanarVehicle(mass, mass * (2.5**2 + 1.5**2) / 12, 1.5, WHEEL, 2.5, 1.5)
+    vehicle = PLANAR
 
     def run(steer):
         return sj.simulate_planar(

@@ -99,10 +99,11 @@ class Ruts(eqx.Module):
     floor plus that floor, or the rut it runs in, whichever is deeper), i.e. the rut of
     a leader in steady state (the time the snow takes from the leader to the follower,
     wheelbase / speed, is not modelled).  Where the follower is offset sideways from its
-    leader's path (a turning vehicle; `track_offset`), it sees the rut's depth times the
-    overlap `clip(1 - |e| / b, 0, 1)` of the two wheel widths (e the offset, b the
-    width): the contact is split by the width-weighted mean depth of the snow under the
-    follower, not into a rut part and a virgin part (a documented simplification).
+    leader's path (a turning vehicle; `track_offset`), or narrower or wider than it, it
+    sees the rut's depth times the share of its width over the rut (`_overlap`: for
+    equal widths b, `clip(1 - |e| / b, 0, 1)`, e the offset): the contact is split by the
+    width-weighted mean depth of the snow under the follower, not into a rut part and a
+    virgin part (a documented simplification).
 
     **Fields:**
 
@@ -181,6 +182,15 @@ def track_offset(
     denominator = jnp.linalg.norm(r[..., None] * d - w, axis=-1) + jnp.linalg.norm(w, axis=-1)
     moving = denominator > 0
     return jnp.where(moving, jnp.abs(numerator) / jnp.where(moving, denominator, 1.0), 0.0)
+
+
+def _overlap(offset, width, leader_width):
+    """The share [-] of a wheel of width b_f [m] whose centre line runs |e| = `offset`
+    [m] beside a rut of width b_l [m] that lies over the rut:
+    |[e - b_f/2, e + b_f/2] and [-b_l/2, b_l/2]| / b_f, in [0, 1]."""
+    inner = jnp.minimum(offset + width / 2, leader_width / 2)
+    outer = jnp.maximum(offset - width / 2, -leader_width / 2)
+    return jnp.clip((inner - outer) / width, 0.0, 1.0)
 
 
 def _levels(follows) -> np.ndarray:
