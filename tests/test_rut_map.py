@@ -1,8 +1,9 @@
 """The rut map (`snowjax.RutMap`, `snowjax.drive_path`): on a straight track it agrees
 with the one-track `multi_pass` model (the rear wheel reads exactly the depth the front
 wheel marked, for a track at any angle to the grid); a wheel driving a circle meets its
-own rut on the second lap (vmapped over two snows); forward- and reverse-mode gradients
-through the map against central differences; reading, marking, memory and bad inputs."""
+own rut on the second lap (vmapped over two snows); forward-mode gradients through the
+map against central differences (reverse mode against forward mode: a `slow` case);
+reading, marking, memory and bad inputs."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ SNOW = sj.WongSnow.thesis_fresh_snow()
 K_0, A_U = 1e6, 5e6  # [Pa/m], [Pa/m^2] (illustrative, as in test_rut.py)
 LOAD, SLIP = 3500.0, 0.2
 H = 0.05  # cell size [m]
+EXTENT = (-1.0, 7.0, -1.0, 5.0)  # (x_min, x_max, y_min, y_max) [m]
 
 
 def _straight(steps, step, angle, wheelbase):
@@ -39,8 +41,9 @@ def test_straight_track_agrees_with_multi_pass_at_any_angle_to_the_grid():
     solves' convergence).  The front wheel on the empty map is the first pass within
     1e-6: a rut of zero depth goes through the generic quadrature, the virgin Wong snow
     through its closed-form front region."""
-    grid = sj.RutMap.empty((-1.0, 7.0, -1.0, 5.0), H, K_0, A_U)
-    out = sj.drive_path(WHEEL, SNOW, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, LOAD, SLIP)
+    grid = sj.RutMap.empty(EXTENT, H, K_0, A_U)
+    loads = jnp.array([LOAD, LOAD])
+    out = sj.drive_path(WHEEL, SNOW, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, loads, SLIP)
     assert np.all(np.asarray(out.status) == Status.CONVERGED)
     passes = sj.multi_pass(WHEEL, SNOW, jnp.array([LOAD, LOAD]), SLIP, K_0, A_U)
     front, rear = np.asarray(out.sinkage[:, 0]), np.asarray(out.rut_depth[:, 1])
@@ -84,28 +87,35 @@ def test_a_wheel_driving_a_circle_meets_its_own_rut_on_the_second_lap():
     assert grid.nbytes == 200 * 200 * 8
 
 
+def _resistance(x):
+    """The rear wheel's motion resistance [N], summed over its steps in the rut, as a
+    function of x = (p_w [Pa], the front wheel's load [N], k_0 [Pa/m]); the shapes of the
+    straight-track test."""
+    snow = sj.WongSnow.thesis_fresh_snow(p_w=x[0])
+    grid = sj.RutMap.empty(EXTENT, H, x[2], A_U)
+    loads = jnp.stack([x[1], jnp.asarray(LOAD)])
+    out = sj.drive_path(WHEEL, snow, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, loads, SLIP)
+    return jnp.sum(out.motion_resistance[24:, 1])
+
+
+X = jnp.array([float(SNOW.p_w), 4000.0, K_0])
+
+
 def test_gradients_through_the_map_match_central_differences():
-    """d(the rear wheel's motion resistance, summed over its steps in the rut) / d(p_w,
-    the front wheel's load, k_0): forward and reverse mode agree with each other to 1e-9
-    and with central differences to 1e-6 relative (steps 1e-4 relative)."""
-    path = _straight(24, 0.125, 0.0, 1.5)
-
-    def resistance(x):
-        snow = sj.WongSnow.thesis_fresh_snow(p_w=x[0])
-        grid = sj.RutMap.empty((-1.0, 5.0, -1.0, 1.0), H, x[2], A_U)
-        loads = jnp.stack([x[1], jnp.asarray(LOAD)])
-        out = sj.drive_path(WHEEL, snow, grid, path, 0.0, loads, SLIP)
-        return jnp.sum(out.motion_resistance[14:, 1])
-
-    x = jnp.array([float(SNOW.p_w), 4000.0, K_0])
-    forward = jax.jacfwd(resistance)(x)
-    reverse = jax.grad(resistance)(x)
-    np.testing.assert_allclose(reverse, forward, rtol=1e-9)
+    """Forward mode w.r.t. p_w, the front wheel's load and k_0 (each reaches the rear
+    wheel only through the map) against central differences, 1e-6 relative (steps 1e-4
+    relative)."""
+    forward = jax.jacfwd(_resistance)(X)
     for k in range(3):
-        h = 1e-4 * float(x[k])
-        central = (resistance(x.at[k].add(h)) - resistance(x.at[k].add(-h))) / (2 * h)
+        h = 1e-4 * float(X[k])
+        central = (_resistance(X.at[k].add(h)) - _resistance(X.at[k].add(-h))) / (2 * h)
         np.testing.assert_allclose(forward[k], central, rtol=1e-6)
         assert abs(float(forward[k])) > 0  # every input reaches the rear wheel
+
+
+@pytest.mark.slow
+def test_reverse_mode_through_the_map_equals_forward_mode():
+    np.testing.assert_allclose(jax.grad(_resistance)(X), jax.jacfwd(_resistance)(X), rtol=1e-9)
 
 
 def test_read_and_mark():

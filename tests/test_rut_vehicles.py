@@ -2,7 +2,11 @@
 `simulate_planar` and `snowjax.mjx.rollout` the rear wheels' sinkage and forces follow
 `multi_pass` at the slips the simulation reached; a turning vehicle's rear wheels leave
 the front ruts by the offset of `track_offset` (checked against circle geometry).  With
-`ruts=None` the simulations are the existing ones (their own tests)."""
+`ruts=None` the simulations are the existing ones (their own tests).
+
+`make test` runs the three simulations' force functions (the code their steps call);
+the full `simulate_longitudinal`, `simulate_planar` and MJX rollouts are `slow` cases (a
+simulation's compile takes 15-25 s here)."""
 
 from __future__ import annotations
 
@@ -41,6 +45,37 @@ def _rear_follows_multi_pass(loads, slips, rear_pull, rear_torque, rear_sinkage,
     return passes
 
 
+def test_longitudinal_wheel_forces_put_the_rear_wheel_in_the_front_wheels_rut():
+    """The longitudinal simulation's force function with `Ruts` (default layout of a
+    tandem: wheel 1 behind wheel 0) at two states: the rear wheel is `multi_pass`'s
+    second pass at the slips of its kinematics, the front wheel its first."""
+    from snowjax._sim.vehicle import _wheel_forces
+
+    contact = sj.ContactModel(SNOW)
+    ruts = sj.Ruts(RUTS.k_0, RUTS.a_u, RUTS.layout(2))
+    speed = jnp.array([[2.0], [1.0]])
+    radius = float(WHEEL.diameter) / 2
+    omega = speed / radius / jnp.array([[0.8, 0.9], [0.5, 0.6]])  # slips 0.2 / 0.1, ...
+    f = jax.jit(lambda v, w: _wheel_forces(v, w, LOAD, WHEEL, contact, 0.05, None, 64, ruts))(
+        speed, omega
+    )
+    assert np.all(np.asarray(f.status) == Status.CONVERGED)
+    for k in range(2):
+        passes = _rear_follows_multi_pass(
+            [LOAD, LOAD],
+            np.asarray(f.slip[k]),
+            float(f.longitudinal_force[k, 1]),
+            float(f.resisting_torque[k, 1]),
+            float(f.sinkage[k, 1]),
+            float(f.sinkage[k, 0]),
+        )
+        scale = float(passes.motion_resistance[0])
+        np.testing.assert_allclose(
+            f.longitudinal_force[k, 0], passes.drawbar_pull[0], rtol=0, atol=1e-7 * scale
+        )
+
+
+@pytest.mark.slow
 def test_longitudinal_rear_wheel_runs_in_the_front_wheels_rut():
     """A tandem (2 wheels, 3.5 kN each, 600 N m on each) from 1 m/s for 2 s."""
     vehicle = sj.Vehicle(mass=2 * LOAD / 9.80665, wheel_inertia=1.5, wheel=WHEEL, num_wheels=2)
@@ -172,6 +207,39 @@ def test_planar_rear_wheels_follow_the_front_ruts_and_leave_them_in_a_turn():
     assert float(last.sinkage[1, 2]) < float(last.sinkage[2, 2])
 
 
+def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
+    """`snowjax.mjx`'s force function (what `step` calls after MJX's velocity stage) with
+    `Ruts`, the shipped vehicle at 2 m/s with its wheels at slip 0.2: the rear wheels'
+    forces are `multi_pass`'s second pass at their slips and static loads."""
+    pytest.importorskip("mujoco")
+    from mujoco import mjx
+
+    import snowjax.mjx as smjx
+
+    model, wheels = smjx.load_vehicle()
+    m = mjx.put_model(model)
+    d = mjx.make_data(m)
+    omega = 2.0 / (float(WHEEL.diameter) / 2 * 0.8)
+    d = d.replace(qvel=d.qvel.at[0].set(2.0).at[np.asarray(wheels.dof_ids)].set(omega))
+    ruts = sj.Ruts(RUTS.k_0, RUTS.a_u, RUTS.layout(4))
+
+    @jax.jit
+    def forces(d):
+        d = mjx.fwd_velocity(m, mjx.fwd_position(m, d))
+        load = wheels.static_load
+        return smjx._snow_forces(m, d, wheels, SNOW, None, load, "classic", 0.05, None, ruts)[-1]
+
+    out = jax.tree.map(np.asarray, forces(d))
+    assert np.all(out.status == Status.CONVERGED)
+    loads = np.asarray(wheels.static_load)
+    passes = sj.multi_pass(WHEEL, SNOW, loads[::2], out.slip[::2], RUTS.k_0, RUTS.a_u)
+    np.testing.assert_allclose(out.longitudinal_force[2], passes.drawbar_pull[1], rtol=1e-7)
+    np.testing.assert_allclose(out.resisting_torque[2], passes.torque[1], rtol=1e-7)
+    np.testing.assert_allclose(out.longitudinal_force[0], passes.drawbar_pull[0], rtol=1e-6)
+    assert out.spin_damping[2] > 0 and np.isfinite(out.spin_damping).all()
+
+
+@pytest.mark.slow
 def test_mjx_rear_wheels_run_in_the_front_wheels_ruts():
     pytest.importorskip("mujoco")
     from mujoco import mjx
