@@ -41,9 +41,7 @@ def test_straight_track_agrees_with_multi_pass_at_any_angle_to_the_grid():
     solves' convergence).  The front wheel on the empty map is the first pass within
     1e-6: a rut of zero depth goes through the generic quadrature, the virgin Wong snow
     through its closed-form front region."""
-    grid = sj.RutMap.empty(EXTENT, H, K_0, A_U)
-    loads = jnp.array([LOAD, LOAD])
-    out = sj.drive_path(WHEEL, SNOW, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, loads, SLIP)
+    out = _drive(jnp.array([float(SNOW.p_w), LOAD, K_0]))
     assert np.all(np.asarray(out.status) == Status.CONVERGED)
     passes = sj.multi_pass(WHEEL, SNOW, jnp.array([LOAD, LOAD]), SLIP, K_0, A_U)
     front, rear = np.asarray(out.sinkage[:, 0]), np.asarray(out.rut_depth[:, 1])
@@ -87,15 +85,18 @@ def test_a_wheel_driving_a_circle_meets_its_own_rut_on_the_second_lap():
     assert grid.nbytes == 200 * 200 * 8
 
 
-def _resistance(x):
-    """The rear wheel's motion resistance [N], summed over its steps in the rut, as a
-    function of x = (p_w [Pa], the front wheel's load [N], k_0 [Pa/m]); the shapes of the
-    straight-track test."""
+def _drive(x):
+    """`drive_path` of the straight-track test as a function of x = (p_w [Pa], the front
+    wheel's load [N], k_0 [Pa/m]) (one compile for that test and the gradients')."""
     snow = sj.WongSnow.thesis_fresh_snow(p_w=x[0])
     grid = sj.RutMap.empty(EXTENT, H, x[2], A_U)
     loads = jnp.stack([x[1], jnp.asarray(LOAD)])
-    out = sj.drive_path(WHEEL, snow, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, loads, SLIP)
-    return jnp.sum(out.motion_resistance[24:, 1])
+    return sj.drive_path(WHEEL, snow, grid, _straight(40, 0.125, 0.6, 2.5), 0.6, loads, SLIP)
+
+
+def _resistance(x):
+    """The rear wheel's motion resistance [N], summed over its steps in the rut."""
+    return jnp.sum(_drive(x).motion_resistance[24:, 1])
 
 
 X = jnp.array([float(SNOW.p_w), 4000.0, K_0])
