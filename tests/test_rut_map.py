@@ -160,6 +160,18 @@ def test_read_and_mark():
             lambda: sj.RutMap.empty((0, 1, 0, 1), 0.1, K_0, A_U).read(jnp.zeros(2), 0.0, 0.2, 0.1),
             "lookahead",
         ),
+        (
+            lambda: sj.drive_path(
+                WHEEL,
+                SNOW,
+                sj.RutMap.empty((0, 2, 0, 2), 0.5, K_0, A_U),
+                jnp.zeros((3, 1, 2)),
+                0.0,
+                LOAD,
+                SLIP,
+            ),
+            "lookahead",
+        ),  # fmt: skip
         (lambda: sj.Ruts(K_0, A_U, (0, -1)).layout(2), "follows"),
         (lambda: sj.Ruts(K_0, A_U).layout(3), "even"),
         (lambda: sj.Ruts(0.0, A_U).layout(2), "k_0"),

@@ -138,6 +138,15 @@ class RutMap(eqx.Module):
                 total = total + jnp.where(inside, value, 0.0) * wx * wy
         return total
 
+    def check_lookahead(self, lookahead) -> None:
+        """`ValueError` unless a concrete `lookahead` [m] exceeds sqrt(2) h."""
+        if not _is_traced(lookahead) and not float(lookahead) > math.sqrt(2) * self.cell_size:
+            raise ValueError(
+                f"lookahead must exceed sqrt(2) * cell_size = "
+                f"{math.sqrt(2) * self.cell_size:.4g} m (a wheel would read its own rut); "
+                f"got {lookahead!r}"
+            )
+
     def read(
         self,
         position: Float[ArrayLike, "... 2"],
@@ -150,12 +159,7 @@ class RutMap(eqx.Module):
         `width` b [m] at `lookahead` [m] ahead of its `position` (x, y) [m] along its
         `heading` [rad] (from x towards y).  `lookahead` must exceed sqrt(2) h (module
         docs: a wheel must not read its own mark)."""
-        if not _is_traced(lookahead) and not float(lookahead) > math.sqrt(2) * self.cell_size:
-            raise ValueError(
-                f"lookahead must exceed sqrt(2) * cell_size = "
-                f"{math.sqrt(2) * self.cell_size:.4g} m (a wheel would read its own rut); "
-                f"got {lookahead!r}"
-            )
+        self.check_lookahead(lookahead)
         heading = jnp.asarray(heading)
         t = jnp.stack([jnp.cos(heading), jnp.sin(heading)], -1)
         n = jnp.stack([-t[..., 1], t[..., 0]], -1)
@@ -214,8 +218,8 @@ class RutMap(eqx.Module):
         along = x * t[0] + y * t[1]
         across = jnp.abs(-x * t[1] + y * t[0])
         half = jax.lax.stop_gradient(width) / 2 + math.sqrt(2) * h
-        reach = math.sqrt(2) * h  # behind the start: closes the gaps between segments
-        inside = moving & (along >= -reach) & (along <= length) & (across <= half)
+        behind = math.sqrt(2) * h  # behind the start: closes the gaps between segments
+        inside = moving & (along >= -behind) & (along <= length) & (across <= half)
         block = jnp.where(inside, jnp.maximum(block, depth.astype(block.dtype)), block)
         return jax.lax.dynamic_update_slice(grid, block, (i0, j0))
 

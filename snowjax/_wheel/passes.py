@@ -15,7 +15,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._leaves import _as_float, parameter
+from .._leaves import _as_float, _is_traced, parameter
 from .._terrain.base import AbstractTerrain
 from .._terrain.rut import Rut
 from .._terrain.rut_map import RutMap, _check_modulus
@@ -254,7 +254,6 @@ class PathResult(eqx.Module):
     rut_map: RutMap
 
 
-@eqx.filter_jit
 def drive_path(
     wheel: AbstractWheel,
     terrain: AbstractTerrain,
@@ -289,7 +288,27 @@ def drive_path(
     - `distribution`, `shear`: as in `solve_wheel`.
 
     **Returns:** `PathResult`.
+
+    **Errors:** `ValueError` for `positions` not of shape (steps, n, 2) and for a
+    concrete `lookahead` (or wheel radius) not above sqrt(2) times the map's cell size
+    (a wheel would read its own marks); at run time, a step longer than the map's
+    reach raises (`RutMap.mark`).
     """
+    if np.ndim(positions) != 3 or np.shape(positions)[-1] != 2:
+        raise ValueError(f"positions must have shape (steps, n, 2); got {np.shape(positions)}")
+    if lookahead is None and not _is_traced(wheel.diameter):
+        lookahead = float(np.max(np.asarray(wheel.diameter))) / 2
+    if lookahead is not None and not _is_traced(lookahead):
+        rut_map.check_lookahead(lookahead)
+    return _drive_path(
+        wheel, terrain, rut_map, positions, headings, loads, slip, lookahead, distribution, shear
+    )
+
+
+@eqx.filter_jit
+def _drive_path(
+    wheel, terrain, rut_map, positions, headings, loads, slip, lookahead, distribution, shear
+):
     positions = jnp.asarray(positions, float)
     steps, n = positions.shape[:2]
     headings = jnp.broadcast_to(jnp.asarray(headings, positions.dtype), (steps, n))
