@@ -116,7 +116,7 @@ from ._wheel.distribution import AbstractStressDistribution
 from ._wheel.equilibrium import Status, _check_model
 from ._wheel.geometry import AbstractWheel, RigidWheel
 from ._wheel.model import ContactModel, _unpack_model
-from ._wheel.passes import Ruts, _in_tracks, _levels, _overlap, track_offset
+from ._wheel.passes import Ruts, _follower_overlap, _in_tracks, _levels, _resolved
 from ._wheel.shear_law import AbstractShearLaw, _shear_name
 
 __all__ = [
@@ -421,13 +421,10 @@ def _rut_overlap(d, wheels, follows, velocity, spin, axle):
     velocities projected on the world's (x, y) plane (z up), the yaw rate the leader
     body's angular velocity about z less its spin's share."""
     b = np.asarray(wheels.body_ids)
-    lead = np.maximum(np.asarray(follows), 0)
-    yaw_rate = d.cvel[b][:, 2] - spin * axle[:, 2]
-    pos = d.xipos[b][:, :2]
-    offset = track_offset(pos[lead], pos, velocity[lead][:, :2], yaw_rate[lead])
-    width = jnp.broadcast_to(wheels.wheel.width, offset.shape)
-    overlap = _overlap(offset, width, width[lead])
-    return jnp.where(np.asarray(follows) >= 0, overlap, 1.0)
+    yaw_rate = (d.cvel[b][:, 2] - spin * axle[:, 2])[np.maximum(np.asarray(follows), 0)]
+    return _follower_overlap(
+        d.xipos[b][:, :2], velocity[:, :2], yaw_rate, wheels.wheel.width, follows
+    )
 
 
 def _snow_forces(m, d, wheels, snow, entry_angle, load, shear, speed_eps, distribution, ruts):
@@ -521,14 +518,6 @@ def _snow_damping_matrix(m, d, wheels, damp, heading, axle):
 
     g = jax.vmap(rows)(b, d.xipos[np.asarray(wheels.body_ids)], heading, axle)  # (n, 2, nv)
     return jnp.einsum("kiv,kij,kjw->vw", g, damp, g)
-
-
-def _checked_ruts(ruts, n):
-    if ruts is None:
-        return None
-    if not isinstance(ruts, Ruts):
-        raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
-    return Ruts(ruts.k_0, ruts.a_u, ruts.layout(n))
 
 
 def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
@@ -626,7 +615,7 @@ def step(
     n = wheels.num_wheels
     if entry_angle is not None:
         entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
-    ruts = _checked_ruts(ruts, n)
+    ruts = _resolved(ruts, n)
 
     d = mjx.fwd_position(m, d)
     d = mjx.sensor_pos(m, d)

@@ -85,7 +85,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import AbstractWheel
-from .._wheel.passes import _in_tracks, _overlap, track_offset
+from .._wheel.passes import _follower_overlap, _in_tracks
 from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
@@ -330,18 +330,13 @@ def _body_to_wheel(vehicle, u, v, r, steer):
 
 def _rut_overlap(vehicle, u, v, r, follows):
     """Each wheel's overlap with its leader's rut (1 for a leader), (..., 4): the
-    follower sees `clip(1 - |e| / b, 0, 1)` of the rut's depth (`passes._overlap`), e its
-    offset from the leader's path about the instantaneous centre of rotation
-    (`track_offset`)."""
+    follower sees `clip(1 - |e| / b, 0, 1)` of the rut's depth, e its offset from the
+    leader's path about the instantaneous centre of rotation (`passes._follower_overlap`)."""
     pos = vehicle.wheel_positions
-    leaders = np.maximum(np.asarray(follows), 0)
-    lead = pos[leaders]
     velocity = jnp.stack(
-        [u[..., None] - r[..., None] * lead[:, 1], v[..., None] + r[..., None] * lead[:, 0]], -1
+        [u[..., None] - r[..., None] * pos[:, 1], v[..., None] + r[..., None] * pos[:, 0]], -1
     )
-    offset = track_offset(lead, pos, velocity, r[..., None])
-    overlap = _overlap(offset, vehicle.wheel.width, vehicle.wheel.width)
-    return jnp.where(np.asarray(follows) >= 0, overlap, 1.0)
+    return _follower_overlap(pos, velocity, r[..., None], vehicle.wheel.width, follows)
 
 
 def _planar_wheel_forces(

@@ -28,7 +28,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.passes import Ruts
+from .._wheel.passes import Ruts, _resolved
 from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
 from .planar import (
     NUM_WHEELS,
@@ -362,10 +362,7 @@ def simulate_planar(
         torque = jnp.asarray(torque, dtype)
     if not callable(steering):
         steering = jnp.asarray(steering, dtype)
-    if ruts is not None:
-        if not isinstance(ruts, Ruts):
-            raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
-        ruts = Ruts(ruts.k_0, ruts.a_u, ruts.layout(NUM_WHEELS))
+    ruts = _resolved(ruts, NUM_WHEELS)
     term = _PlanarTerm(
         vehicle=vehicle,
         contact=ContactModel(cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel),

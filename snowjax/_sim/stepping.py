@@ -48,7 +48,7 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.passes import Ruts
+from .._wheel.passes import Ruts, _resolved
 from .._wheel.shear_law import AbstractShearLaw, _shear_name
 from .levenberg_marquardt import _LevenbergMarquardt
 from .vehicle import (
@@ -405,10 +405,7 @@ def simulate_longitudinal(
     if not callable(torque):
         _check_concrete("torque", torque, lambda x: np.ones_like(x, bool), "[N m]")
         torque = jnp.asarray(torque, dtype)
-    if ruts is not None:
-        if not isinstance(ruts, Ruts):
-            raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
-        ruts = Ruts(ruts.k_0, ruts.a_u, ruts.layout(n))
+    ruts = _resolved(ruts, n)
     term = _VehicleTerm(
         vehicle=vehicle,
         contact=ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),

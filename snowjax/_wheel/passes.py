@@ -193,6 +193,31 @@ def _overlap(offset, width, leader_width):
     return jnp.clip((inner - outer) / width, 0.0, 1.0)
 
 
+def _follower_overlap(position, velocity, yaw_rate, width, follows):
+    """Each wheel's overlap with its leader's rut (`_overlap` of its `track_offset`), 1
+    for a leader: `position`, `velocity` (n, 2) / (..., n, 2) of every wheel in one
+    plane frame [m, m/s], `yaw_rate` [rad/s] broadcastable to (..., n) (each follower's
+    leader's), `width` [m] broadcastable to (n,)."""
+    follows = np.asarray(follows)
+    lead = np.maximum(follows, 0)
+    position = jnp.asarray(position)
+    offset = track_offset(
+        position[..., lead, :], position, velocity[..., lead, :], jnp.asarray(yaw_rate)
+    )
+    width = jnp.broadcast_to(jnp.asarray(width), (follows.size,))
+    return jnp.where(follows >= 0, _overlap(offset, width, width[lead]), 1.0)
+
+
+def _resolved(ruts, num_wheels: int):
+    """`ruts` (None or `Ruts`) with its layout for `num_wheels` wheels resolved and
+    checked, as the simulations take it."""
+    if ruts is None:
+        return None
+    if not isinstance(ruts, Ruts):
+        raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
+    return Ruts(ruts.k_0, ruts.a_u, ruts.layout(num_wheels))
+
+
 def _levels(follows) -> np.ndarray:
     """Each wheel's place in its track (0: a leader on virgin snow, 1: behind it, ...)."""
     level = np.zeros(len(follows), int)
