@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 reproduce: $(STAMP)
 	$(BIN)/snowjax reproduce $(ARGS)
 
-LINTED := snowjax tests benchmarks notebooks docs/hooks
+LINTED := snowjax tests benchmarks examples notebooks docs/hooks
 
 # Lint, format and type checks first (seconds), then the suite on two workers: XLA:CPU runs
 # each compiled solve on one thread.  --dist loadscope keeps a test file on one worker, so

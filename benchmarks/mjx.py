@@ -1,22 +1,27 @@
-"""Cost of the snowjax wheel forces inside MuJoCo MJX, per wheel per step, vs the MJX step.
+"""Throughput of the snowjax rover inside MuJoCo MJX: environment steps per second with and
+without the snow's wheel forces.
 
-    python benchmarks/mjx.py            # batch 1 and 1,024 environments (about 2-3 minutes)
+    python benchmarks/mjx.py            # 1, 1,024 and 4,096 environments (minutes on 2 cores)
     python benchmarks/mjx.py --quick    # fewer steps
     python benchmarks/mjx.py --no-readme
 
-Needs the `mjx` extra.  The shipped vehicle (`snowjax.mjx.load_vehicle`: 4 thesis tyres,
-thesis fresh snow, classic shear, float64) starts at 2 m/s with its wheels at slip 0.2 and
-is driven by 540 N m per wheel.  Two jitted `lax.scan` rollouts from that state:
+Needs the `mjx` extra.  The shipped rover (`snowjax.mjx.load_rover`: free-floating
+chassis, sprung wheels, Ackermann steering, 4 thesis tyres; 16 dofs) starts at 2 m/s with
+its wheels at slip 0.2, steered at 0.1 rad and driven by 540 N m per wheel, on the thesis
+fresh snow (classic shear, `Lateral()`, float64 on the CPU).  Two jitted `lax.scan`
+rollouts from that state:
 
-- `mjx.step`: MuJoCo MJX alone (no snow forces);
-- `snowjax.mjx.step`: the same MJX pipeline plus the four wheels' snow forces
-  (warm-started equilibria, the forward-mode slope for the implicit spin damping, the
-  wheel Jacobians and the implicit update).
+- `mjx.step`: MuJoCo MJX alone (no snow forces: the wheels spin on a frictionless floor;
+  joint damping explicit, see `rollouts`);
+- `snowjax.mjx.step`: the same MJX pipeline plus the four wheels' snow forces (warm-started
+  equilibria with slip angle, their forward-mode slopes, the wheel Jacobians and the
+  implicit update).
 
-The snowjax cost is the difference, reported per step and per wheel.  Batch 1,024 vmaps
-the rollout over 1,024 environments, each on its own snow (p_w 60-200 kPa).  Timings are
-the best of three runs after the compile.  Prints the table and writes it between
-`<!-- mjx-benchmarks:start -->` and `<!-- mjx-benchmarks:end -->` in README.md.
+The snowjax cost is the difference.  1,024 and 4,096 environments vmap the rollout, each
+environment on its own snow (p_w 60-200 kPa).  `--device gpu` runs on the GPU in float32
+(where one is present).  Timings are the best of three runs after the compile.  Prints
+the table and writes it between `<!-- mjx-benchmarks:start -->` and
+`<!-- mjx-benchmarks:end -->` in README.md.
 """
 
 from __future__ import annotations
@@ -30,9 +35,11 @@ sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 import jax  # noqa: E402
 
-jax.config.update("jax_enable_x64", True)
+if "--device" not in sys.argv or "cpu" in sys.argv:  # float32 on a GPU (see --device)
+    jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
+from mujoco import mjx  # noqa: E402
 from readme_block import write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
@@ -42,29 +49,37 @@ from run import best_time, machine  # noqa: E402
 import snowjax as sj  # noqa: E402
 from snowjax import mjx as smjx  # noqa: E402
 
-mjx = smjx.mjx
 TORQUE = 540.0  # [N m] per wheel
 SPEED = 2.0  # [m/s]
 SLIP = 0.2
+STEER = 0.1  # [rad]
 
 
 def start(m, wheels):
-    """MJX state at 2 m/s, every wheel spinning at slip 0.2."""
+    """MJX state at 2 m/s, every wheel spinning at slip 0.2, steered and driven."""
     d = mjx.make_data(m)
     radius = float(wheels.wheel.diameter) / 2
     omega = SPEED / (radius * (1 - SLIP))
     qvel = d.qvel.at[0].set(SPEED)
     qvel = qvel.at[np.asarray(wheels.dof_ids)].set(omega)
-    return d.replace(qvel=qvel, ctrl=jnp.full(m.nu, TORQUE))
+    return d.replace(qvel=qvel, ctrl=smjx.rover_controls(STEER, jnp.full(4, TORQUE)))
 
 
 def rollouts(m, wheels, d0, steps):
     """(plain MJX, MJX + snowjax) rollouts of `steps` steps, functions of p_w [Pa]."""
     base = sj.WongSnow.thesis_fresh_snow()
 
+    # MJX alone integrates the joints' damping explicitly: with MuJoCo's implicit damping,
+    # MJX's Euler update (a batched Cholesky of M + dt D) hung on this CPU when vmapped over
+    # 256 or more environments (jaxlib 0.10.2: no CPU use, never returned; 128 ran).
+    # snowjax.mjx.step does its own implicit solve (an LU) and ran at 1,024 and 4,096.
+    explicit = m.replace(
+        opt=m.opt.replace(disableflags=m.opt.disableflags | mjx.DisableBit.EULERDAMP)
+    )
+
     def plain(p_w):
         def body(d, _):
-            d = mjx.step(m, d)
+            d = mjx.step(explicit, d)
             return d, d.qvel[0]
 
         d = d0.replace(qpos=d0.qpos + 0.0 * p_w)  # same signature as `snow`
@@ -72,8 +87,7 @@ def rollouts(m, wheels, d0, steps):
 
     def snow(p_w):
         terrain = sj.WongSnow(p_w, base.z_w, base.cohesion, base.tan_phi, base.shear_modulus)
-        ctrl = jnp.full(m.nu, TORQUE)
-        return smjx.rollout(m, d0, wheels, terrain, ctrl, steps).qvel[:, 0]
+        return smjx.rollout(m, d0, wheels, terrain, d0.ctrl, steps).qvel[:, 0]
 
     return plain, snow
 
@@ -82,11 +96,11 @@ def measure(batch, steps, m, wheels, d0):
     """Seconds per step of both rollouts for `batch` environments; the compile times [s]."""
     plain, snow = rollouts(m, wheels, d0, steps)
     if batch == 1:
-        p_w = jnp.asarray(85.55e3)
+        p_w = jnp.asarray(85.55e3, d0.qpos.dtype)
         runs = {"plain": jax.jit(plain), "snow": jax.jit(snow)}
     else:
         rng = np.random.default_rng(0)
-        p_w = jnp.asarray(np.exp(rng.uniform(np.log(60e3), np.log(200e3), batch)))
+        p_w = jnp.asarray(np.exp(rng.uniform(np.log(60e3), np.log(200e3), batch)), d0.qpos.dtype)
         runs = {"plain": jax.jit(jax.vmap(plain)), "snow": jax.jit(jax.vmap(snow))}
     out = {}
     for name, fn in runs.items():
@@ -105,12 +119,17 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps per rollout")
     parser.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
+    parser.add_argument("--device", choices=("cpu", "gpu"), default="cpu",
+                        help="cpu (float64, default) or gpu (float32)")  # fmt: skip
     args = parser.parse_args(argv)
-    model, wheels = smjx.load_vehicle()
+    device = jax.devices(args.device)[0]
+    jax.config.update("jax_default_device", device)
+    model, wheels = smjx.load_rover()
     m = mjx.put_model(model)
     d0 = start(m, wheels)
     n = wheels.num_wheels
-    cases = ((1, 100 if args.quick else 400), (1024, 5 if args.quick else 20))
+    quick = args.quick
+    cases = ((1, 100 if quick else 400), (1024, 3 if quick else 10), (4096, 2 if quick else 5))
     rows = []
     for batch, steps in track(cases, description="MJX rollouts", transient=True):
         r = measure(batch, steps, m, wheels, d0)
@@ -119,15 +138,19 @@ def main(argv=None):
         rows.append((batch, steps, t_mjx, t_all, t_wheels, t_wheels / n, r["snow"][1]))
 
     head = (
-        "| environments | steps timed | MJX step | MJX + snowjax step | snowjax wheel forces"
-        " per step (per wheel) | wheel forces / MJX step | first-call compile (MJX + snowjax) |"
+        "| environments | steps timed | MJX env-steps/s | MJX + snowjax env-steps/s |"
+        " MJX step | MJX + snowjax step | snowjax wheel forces per step (per wheel) |"
+        " wheel forces / MJX step | first-call compile (MJX + snowjax) |"
     )
-    lines = [head, "|---|---|---|---|---|---|---|"]
+    lines = [head, "|---|---|---|---|---|---|---|---|---|"]
     platform = jax.default_backend().upper()
-    table = Table(title=f"snowjax wheel forces inside MJX (float64, 4 wheels, {platform})")
+    precision = "float64" if jax.config.jax_enable_x64 else "float32"
+    table = Table(title=f"snowjax rover in MJX ({precision}, 4 wheels, {platform})")
     for col in (
         "envs",
         "steps",
+        "MJX steps/s",
+        "+snow steps/s",
         "MJX step",
         "MJX+snowjax",
         "wheels (per wheel)",
@@ -146,6 +169,8 @@ def main(argv=None):
         cells = (
             f"{batch:,}",
             str(steps),
+            f"{batch / t_mjx:,.0f}",
+            f"{batch / t_all:,.0f}",
             us(t_mjx, batch),
             us(t_all, batch),
             f"{us(t_wheels, batch)} ({t_wheel / batch * 1e6:.1f} µs/wheel)",
@@ -164,8 +189,10 @@ def main(argv=None):
             "",
             f"* Machine: {where}.  Measured {time.strftime('%Y-%m-%d')} with"
             f" `python benchmarks/mjx.py{' --quick' if args.quick else ''}`.",
-            "* Wheel forces = (MJX + snowjax step) - (MJX step): the four equilibria with their"
-            " forward-mode slopes, the wheel Jacobians and the implicit spin update.",
+            f"* {precision}; the shipped rover (16 dofs, 4 wheels); env-steps/s = environments"
+            " x MJX steps (5 ms) per second.  Wheel forces = (MJX + snowjax step) - (MJX step):"
+            " the four equilibria with their slip angles, their forward-mode slopes, the wheel"
+            " Jacobians and the implicit update.",
         ]
     )
     if not args.no_readme:

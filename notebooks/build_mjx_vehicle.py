@@ -13,11 +13,12 @@ and resisting torque M_w, eq. 2.12, at the quasi-static equilibrium 4.14 of Sank
 written into the wheel rows of `data.xfrc_applied`; `snowjax.mjx.rollout` scans it. Both are
 pure JAX, so a rollout can be jitted, vmapped over snow parameter sets and differentiated.
 
-The shipped model (`snowjax/data/mjx_vehicle.xml`) is a planar 4-wheel vehicle of 1,427 kg
-on four thesis tyres (D = 0.736 m, b = 0.235 m, I = 1.5 kg m²), driven by 540 N m per wheel
-from rest for 3 s (600 MJX steps of 5 ms). MuJoCo's frictionless floor stands for the
-compacted rut bottom and carries the load; the snow supplies the tangential forces (see the
-`snowjax.mjx` module documentation for the load model).
+The shipped model (`snowjax/data/mjx_rover.xml`) is a steerable 4-wheel rover of 1,427 kg
+(free-floating chassis, sprung wheels, Ackermann steering) on four thesis tyres
+(D = 0.736 m, b = 0.235 m, I = 1.5 kg m²), driven straight ahead by 540 N m per wheel from
+rest for 3 s (600 MJX steps of 5 ms). MuJoCo's frictionless floor stands for the compacted
+rut bottom and carries the load; the snow supplies the tangential forces and torques (see
+the `snowjax.mjx` module documentation for the load model).
 
 This notebook needs the optional extra: `pip install 'snowjax[mjx]'`. SI units throughout."""),
     new_code_cell("""import os
@@ -39,7 +40,7 @@ STEPS = 600  # 3 s at 5 ms
 TORQUE = 540.0  # [N m] per wheel
 NUM_SNOWS = 8 if SMALL else 1024  # snow parameter sets in the one vmapped rollout
 
-model, wheels = smjx.load_vehicle()
+model, wheels = smjx.load_rover()
 m = mjx.put_model(model)
 d0 = mjx.make_data(m)
 print(f"timestep {model.opt.timestep} s, static wheel loads {np.asarray(wheels.static_load).round(1)} N")"""),
@@ -63,7 +64,8 @@ def snow_of(x):
 
 
 def drive(x):
-    r = smjx.rollout(m, d0, wheels, snow_of(x), jnp.full(4, TORQUE), STEPS)
+    ctrl = smjx.rover_controls(0.0, jnp.full(4, TORQUE))  # straight ahead
+    r = smjx.rollout(m, d0, wheels, snow_of(x), ctrl, STEPS)
     slip = jnp.mean(r.wheels.slip, axis=-1)
     return r.qpos[-1, 0], (r.qvel[:, 0], slip, jnp.max(r.wheels.status, axis=-1))
 
@@ -107,7 +109,7 @@ print("status of the wheel equilibria:", {sj.Status(int(s)).name: int(np.sum(wor
 assert np.all(np.isfinite(np.asarray(distance))) and np.all(np.isfinite(np.asarray(gradient)))"""),
     new_markdown_cell("""## Two snows
 
-On the firmer snow the same torque drives the vehicle at a lower slip and it gets further."""),
+On the firmer snow the same torque drives the rover at a lower slip and it gets further."""),
     new_code_cell("""time_s = model.opt.timestep * np.arange(1, STEPS + 1)
 fig, axes = plt.subplots(1, 2, figsize=(10, 3.6))
 for row, label in ((0, "fresh snow (thesis)"), (1, "firm snow")):

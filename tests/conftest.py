@@ -42,23 +42,23 @@ jax.config.update("jax_enable_x64", True)
 # pytest-xdist's `--dist loadscope` hands out test files in collection order, one at a
 # time as a worker frees up; alphabetical order left a long file (test_wheel.py) for the
 # end and one worker idle meanwhile (958 worker-seconds in 508 s of wall time).  The
-# longest files go first (longest-processing-time-first scheduling), by their summed
-# test durations on 2 cores (2026-11-26, seconds, without the `slow` cases): properties
-# 188, wheel 115, terrains 101, sim 84, lateral 71, deflecting_tire 57, mjx 55,
-# single_wheel 48, planar 43, reproduce 37.  The rut files (rut 31, rut_vehicles 26,
-# rut_map 17 on 2026-11-26; the same files' sums move by 20 % from run to run, and by
-# 30 s when a file lands on a worker without the programs it reuses) are left to the
-# tail, where the runs with them there were the faster ones.  A file missing from the
-# list keeps its place after them.  The order also decides which files share a worker, and
-# with them the compiled programs reused.
+# longest files go first (longest-processing-time-first scheduling), by their summed test
+# durations on 2 cores (2026-11-26, seconds, without the `slow` cases): properties 188,
+# wheel 115, terrains 101, sim 84, lateral 71, deflecting_tire 57, single_wheel 48, planar
+# 43, reproduce 37; mjx about 170 since the 3-D rover (2026-11-27), second.  The rut files
+# (rut 31, rut_vehicles 26, rut_map 17 on 2026-11-26; the same files' sums move by 20 %
+# from run to run, and by 30 s when a file lands on a worker without the programs it
+# reuses) are left to the tail, where the runs with them there were the faster ones.  A
+# file missing from the list keeps its place after them.  The order also decides which
+# files share a worker, and with them the compiled programs reused.
 _LONGEST_FIRST = (
     "test_properties.py",
+    "test_mjx.py",
     "test_wheel.py",
     "test_terrains.py",
     "test_sim.py",
     "test_lateral.py",
     "test_deflecting_tire.py",
-    "test_mjx.py",
     "test_single_wheel.py",
     "test_planar.py",
     "test_reproduce.py",

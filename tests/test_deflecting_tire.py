@@ -325,11 +325,10 @@ def test_both_simulations_and_mjx_take_the_tire():
         sj.TorqueProfile(knots, jnp.full(5, 300.0)), 1.0, 0.01,
     )  # fmt: skip
     assert np.all(np.isfinite(np.asarray(traj_p.x)))
-    model, wheels = smjx.load_vehicle()
+    model, wheels = smjx.load_rover()
     wheels = eqx.tree_at(lambda w: w.wheel, wheels, tire)
     m = mjx.put_model(model)
-    r = jax.jit(lambda s: smjx.rollout(m, mjx.make_data(m), wheels, s, jnp.full(4, 540.0), 200))(
-        SNOW
-    )
+    ctrl = smjx.rover_controls(0.1, jnp.full(4, 540.0))
+    r = jax.jit(lambda s: smjx.rollout(m, mjx.make_data(m), wheels, s, ctrl, 200))(SNOW)
     assert np.all(np.isfinite(np.asarray(r.qpos)))
     assert np.all(np.asarray(r.wheels.status) == sj.Status.CONVERGED)

@@ -28,7 +28,8 @@ MODELS = {"_leaves", "_constants", "_terrain", "_wheel", "_tire", "_empirical"}
 for name in WORKFLOWS:
     ALLOWED[name] = MODELS | WORKFLOWS
 ALLOWED["_cli"] = MODELS | WORKFLOWS
-ALLOWED["mjx"] = MODELS | WORKFLOWS  # snowjax.mjx: the optional MuJoCo MJX bridge
+ALLOWED["_mjx"] = MODELS | WORKFLOWS  # the optional MuJoCo MJX bridge
+ALLOWED["mjx"] = {"_mjx"}  # snowjax.mjx: its public names
 
 
 def _modules():

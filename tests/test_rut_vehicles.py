@@ -209,14 +209,15 @@ def test_planar_rear_wheels_follow_the_front_ruts_and_leave_them_in_a_turn():
 
 def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     """`snowjax.mjx`'s force function (what `step` calls after MJX's velocity stage) with
-    `Ruts`, the shipped vehicle at 2 m/s with its wheels at slip 0.2: the rear wheels'
+    `Ruts`, the shipped rover at 2 m/s with its wheels at slip 0.2: the rear wheels'
     forces are `multi_pass`'s second pass at their slips and static loads."""
     pytest.importorskip("mujoco")
     from mujoco import mjx
 
     import snowjax.mjx as smjx
+    from snowjax._mjx.step import _contact_model, _snow_forces
 
-    model, wheels = smjx.load_vehicle()
+    model, wheels = smjx.load_rover()
     m = mjx.put_model(model)
     d = mjx.make_data(m)
     omega = 2.0 / (float(WHEEL.diameter) / 2 * 0.8)
@@ -227,7 +228,8 @@ def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     def forces(d):
         d = mjx.fwd_velocity(m, mjx.fwd_position(m, d))
         load = wheels.static_load
-        return smjx._snow_forces(m, d, wheels, SNOW, None, load, "classic", 0.05, None, ruts)[-1]
+        contact = _contact_model(SNOW, "classic", None, None)[-1]
+        return _snow_forces(m, d, wheels, contact, None, load, 0.05, ruts)[-1]
 
     out = jax.tree.map(np.asarray, forces(d))
     assert np.all(out.status == Status.CONVERGED)
@@ -246,18 +248,17 @@ def test_mjx_rear_wheels_run_in_the_front_wheels_ruts():
 
     import snowjax.mjx as smjx
 
-    model, wheels = smjx.load_vehicle()
+    model, wheels = smjx.load_rover()
     m = mjx.put_model(model)
     d = mjx.make_data(m)
     d = d.replace(qvel=d.qvel.at[0].set(1.0))
-    out = jax.jit(
-        lambda d: smjx.rollout(m, d, wheels, SNOW, jnp.full(4, 500.0), 40, ruts=RUTS).wheels
-    )(d)
+    ctrl = smjx.rover_controls(0.0, jnp.full(4, 500.0))
+    out = jax.jit(lambda d: smjx.rollout(m, d, wheels, SNOW, ctrl, 40, ruts=RUTS).wheels)(d)
     last = jax.tree.map(lambda x: np.asarray(x)[-1], out)
     assert np.all(last.status == Status.CONVERGED)
     loads = np.asarray(wheels.static_load)
     passes = sj.multi_pass(WHEEL, SNOW, loads[::2], last.slip[::2], RUTS.k_0, RUTS.a_u)
-    # The shipped vehicle's wheels: front left, front right, rear left, rear right.
+    # The shipped rover's wheels: front left, front right, rear left, rear right.
     np.testing.assert_allclose(last.longitudinal_force[2], passes.drawbar_pull[1], rtol=1e-7)
     np.testing.assert_allclose(last.resisting_torque[2], passes.torque[1], rtol=1e-7)
     virgin = sj.wheel_forces(last.speed[2], last.wheel_speed[2], loads[2], WHEEL, SNOW)

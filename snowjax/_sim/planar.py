@@ -78,6 +78,7 @@ from typing import Any
 
 import diffrax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
@@ -172,13 +173,20 @@ class PlanarVehicle(eqx.Module):
         if not self.ackermann:
             front_left = front_right = delta
         else:
-            length, half = self.wheelbase, self.track_width / 2
-            s, c = jnp.sin(delta), jnp.cos(delta)
-            # tan(delta_k) = L tan(delta) / (L - y_k tan(delta)), written without tan.
-            front_left = jnp.arctan2(length * s, length * c - half * s)
-            front_right = jnp.arctan2(length * s, length * c + half * s)
+            front_left, front_right = _ackermann(delta, self.wheelbase, self.track_width)
         zero = jnp.zeros_like(front_left)
         return jnp.stack([front_left, front_right, zero, zero])
+
+
+def _ackermann(delta, wheelbase, track_width):
+    """(left, right) front steer angles [rad] of Ackermann steering for the bicycle-model
+    angle delta [rad]: `tan delta_k = L tan delta / (L - y_k tan delta)`, y_k = +-w/2,
+    written without tan (finite for every delta)."""
+    half = track_width / 2
+    s, c = jnp.sin(delta), jnp.cos(delta)
+    left = jnp.arctan2(wheelbase * s, wheelbase * c - half * s)
+    right = jnp.arctan2(wheelbase * s, wheelbase * c + half * s)
+    return left, right
 
 
 class SteeringProfile(eqx.Module):
@@ -345,15 +353,28 @@ def _planar_wheel_forces(
     """Snow forces on the four wheels at body velocities (u, v, r) and spins omega, for a
     `ContactModel` `contact`; with `ruts` (`Ruts`, layout resolved) the rear wheels run
     in the front wheels' ruts (`_rut_overlap`)."""
-    radius = vehicle.wheel.diameter / 2
     vx, vy = _body_to_wheel(vehicle, u, v, r, steer)
+    overlap = None if ruts is None else _rut_overlap(vehicle, u, v, r, ruts.follows)
+    return _frame_forces(
+        vehicle.wheel, contact, vehicle.wheel_load, vx, vy, omega, speed_eps, guess, steps,
+        ruts, overlap,
+    )  # fmt: skip
+
+
+def _frame_forces(wheel, contact, load, vx, vy, omega, speed_eps, guess, steps, ruts, overlap):
+    """Snow forces on wheels in their own frames (heading, axle, vertical) from the wheel
+    centres' velocities (v_x along the heading, v_y along the axle [m/s]) and spins omega
+    [rad/s], shapes (..., n): `simulate_planar`'s and `snowjax.mjx`'s force function.
+    `wheel`'s leaves are scalar or of shape (n,); `load` (n,) [N]; with `ruts` (layout
+    resolved) the followers run in their leaders' ruts, seeing `overlap` (..., n) of them."""
+    radius = wheel.diameter / 2
     kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
     slip, beta, direction, scale_x, scale_y, compaction = kinematics
-    load = vehicle.wheel_load
 
     def solve(c, idx=slice(None)):
+        part = jax.tree.map(lambda x: x[idx] if jnp.ndim(x) == 1 else x, wheel)
         st = solve_wheel(
-            vehicle.wheel,
+            part,
             c,
             load[idx],
             slip[..., idx],
@@ -366,8 +387,7 @@ def _planar_wheel_forces(
     if ruts is None:
         st, _ = solve(contact)
     else:
-        overlap = _rut_overlap(vehicle, u, v, r, ruts.follows)
-        st = _in_tracks(ruts, ruts.follows, contact, vehicle.wheel.width, overlap, solve)
+        st = _in_tracks(ruts, ruts.follows, contact, wheel.width, overlap, solve)
     # The mirror image of a wheel travelling backwards is turned by 180 degrees about the
     # vertical: forces along the heading and the axle change sign, the moment about the
     # vertical does not.

@@ -1,0 +1,1 @@
+"""The MuJoCo MJX bridge behind `snowjax.mjx` (optional extra `snowjax[mjx]`)."""

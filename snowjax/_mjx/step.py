@@ -1,0 +1,402 @@
+# pyright: reportAttributeAccessIssue=false
+# (mujoco is a C extension without type stubs: pyright cannot see its attributes.)
+"""`snowjax.mjx.step` and `rollout`: one MJX time step with the snow's forces on the
+wheels, and a scan of it (the module documentation of `snowjax.mjx` explains the model)."""
+
+from __future__ import annotations
+
+import equinox as eqx
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jaxtyping import Array, ArrayLike, Float, Int
+
+from .._sim.planar import _frame_forces
+from .._sim.vehicle import (
+    DEFAULT_SPEED_EPS,
+    _check_concrete,
+    _check_dynamic_shear,
+    _check_parameters,
+)
+from .._terrain.base import Terrain
+from .._wheel.contact import ShearModel
+from .._wheel.distribution import AbstractStressDistribution
+from .._wheel.equilibrium import Status, _check_model
+from .._wheel.lateral import Lateral
+from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.passes import Ruts, _follower_overlap, _levels, _resolved
+from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
+from .wheels import MjxWheels, _ground, mjx
+
+__all__ = ["MjxWheelForces", "Rollout", "step", "rollout"]
+
+# The wheel equilibrium's Newton iteration limit (`solve_wheel`'s `max_steps`), as in
+# `snowjax.wheel_forces`: warm-started from the last step it takes two or three.
+_WHEEL_MAX_STEPS = 64
+
+
+class MjxWheelForces(eqx.Module):
+    """What `step` computed for each wheel (leading axis: wheels, in `MjxWheels` order).
+
+    - `load`: vertical load used [N] (ground normal force of the previous step, or
+      `load=`).
+    - `speed`: the wheel centre's speed along its heading (axle x ground normal) [m/s];
+      `lateral_speed`: along the axle's projection on the ground (positive to the
+      wheel's left) [m/s]; `slip_angle`: beta of `snowjax.planar_wheel_kinematics` [rad].
+    - `wheel_speed`: spin about the axle, world frame [rad/s].
+    - `slip`: slip i [-]; `sinkage`: z0 [m]; `entry_angle`: theta0 [rad] (pass it back).
+    - `longitudinal_force`: drawbar pull applied along the heading [N];
+      `lateral_force`: applied along the axle's ground projection [N];
+      `resisting_torque`: M_w applied against the spin [N m]; `aligning_torque`: M_z
+      applied about the ground normal [N m] (all after the lift-off and rest
+      regularisations).
+    - `spin_damping`: c = dM_w/domega >= 0 used implicitly [N m s/rad].
+    - `normal`: the ground's unit normal under the wheel (world frame) [-], shape (n, 3).
+    - `status`: `Status` of each equilibrium (int32).
+    """
+
+    load: Float[Array, "... n"]
+    speed: Float[Array, "... n"]
+    lateral_speed: Float[Array, "... n"]
+    slip_angle: Float[Array, "... n"]
+    wheel_speed: Float[Array, "... n"]
+    slip: Float[Array, "... n"]
+    sinkage: Float[Array, "... n"]
+    entry_angle: Float[Array, "... n"]
+    longitudinal_force: Float[Array, "... n"]
+    lateral_force: Float[Array, "... n"]
+    resisting_torque: Float[Array, "... n"]
+    aligning_torque: Float[Array, "... n"]
+    spin_damping: Float[Array, "... n"]
+    normal: Float[Array, "... n 3"]
+    status: Int[Array, "... n"]
+
+
+def _wheel_frames(m, d, wheels, normal):
+    """Each wheel's frame and velocities: (v_x, v_y, omega, heading, lateral, axle,
+    centre velocity), from MJX's positions and velocities (public `mjx.Data` fields)."""
+    b = np.asarray(wheels.body_ids)
+    root = np.asarray(m.body_rootid)[b]
+    axle = jnp.einsum("nij,nj->ni", d.xmat[b], jnp.asarray(wheels.axes, d.qpos.dtype))
+    heading = jnp.cross(axle, normal)
+    heading = heading / jnp.linalg.norm(heading, axis=-1, keepdims=True)
+    lateral = jnp.cross(normal, heading)  # on the ground, towards the wheel's left
+    cvel = d.cvel[b]  # (angular, linear at the root's subtree centre of mass)
+    velocity = cvel[:, 3:] + jnp.cross(cvel[:, :3], d.xipos[b] - d.subtree_com[root])
+    vx = jnp.sum(velocity * heading, -1)
+    vy = jnp.sum(velocity * lateral, -1)
+    spin = jnp.sum(cvel[:, :3] * axle, -1)
+    return vx, vy, spin, heading, lateral, axle, velocity
+
+
+def _rut_overlap(d, wheels, follows, velocity, spin, axle):
+    """Each wheel's overlap with its leader's rut (`Ruts`; 1 for a leader): positions and
+    velocities projected on the world's (x, y) plane (z up), the yaw rate the leader
+    body's angular velocity about z less its spin's share."""
+    b = np.asarray(wheels.body_ids)
+    yaw_rate = (d.cvel[b][:, 2] - spin * axle[:, 2])[np.maximum(np.asarray(follows), 0)]
+    return _follower_overlap(
+        d.xipos[b][:, :2], velocity[:, :2], yaw_rate, wheels.wheel.width, follows
+    )
+
+
+def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ruts):
+    """(world wrenches (n, 6), damping blocks D (n, 4, 3), frame rows (n, 4, 3) and
+    (n, 3, 3), MjxWheelForces) of the snow on every wheel at MJX's current state."""
+    dtype = d.qpos.dtype
+    gravity = jnp.asarray(m.opt.gravity, dtype)
+    up = -gravity / jnp.linalg.norm(gravity)
+    contact_load, normal = _ground(d, wheels, up)
+    if isinstance(load, str):  # "contact": the ground's normal force of the last step
+        load = contact_load
+    vx, vy, spin, heading, lateral, axle, velocity = _wheel_frames(m, d, wheels, normal)
+    load = jnp.broadcast_to(jnp.asarray(load, dtype), vx.shape)
+    min_load = wheels.min_load.astype(dtype)
+    # A traced prescribed load that is negative or not finite: no force, INVALID_INPUT.
+    valid_load = jnp.isfinite(load) & (load >= 0)
+    load = jnp.where(valid_load, load, 0.0)
+    airborne = jnp.clip(load / min_load, 0.0, 1.0)  # lift-off: forces fade to 0
+    solve_load = jnp.maximum(load, min_load)
+    n = wheels.num_wheels
+    follows = (-1,) * n if ruts is None else ruts.follows
+    overlap = None if ruts is None else _rut_overlap(d, wheels, follows, velocity, spin, axle)
+
+    def forces(u):
+        f = _frame_forces(
+            wheels.wheel, contact, solve_load, u[0], u[1], u[2], speed_eps, entry_angle,
+            _WHEEL_MAX_STEPS, ruts, overlap,
+        )  # fmt: skip
+        out = (f.drawbar_pull, f.lateral_force, -f.resisting_torque, f.aligning_torque)
+        return jnp.stack(out), f
+
+    # Each wheel's forces depend on its own (v_x, v_y, omega) and, in a rut, on its
+    # leaders': three forward-mode tangents per level of wheels (leaders, their
+    # followers, ...) give the 4 x 3 block of every wheel at once.  Vmapping the jvp over
+    # the tangents traces (and runs) the equilibrium solves once.
+    level = _levels(follows)
+    masks = (level[None, :] == np.arange(level.max() + 1)[:, None]).astype(float)
+    basis = np.einsum("ln,ij->lijn", masks, np.eye(3)).reshape(-1, 3, n)
+    u0 = jnp.stack([vx, vy, spin])
+    _, jac, f = jax.vmap(
+        lambda t: jax.jvp(forces, (u0,), (t,), has_aux=True), out_axes=(None, 0, None)
+    )(jnp.asarray(basis, dtype))
+    # jac[3 level + j, i, k]: d(output i of wheel k) / d(input j of wheel k's level).
+    jac = jac.reshape(-1, 3, 4, n)[level, :, :, np.arange(n)]  # (n, 3 inputs, 4 outputs)
+    damp = -jnp.swapaxes(jac, 1, 2)  # D = -d(F_x, F_y, -M_w, M_z)/d(v_x, v_y, omega)
+    diagonal = jnp.maximum(jnp.diagonal(damp[:, :3, :3], axis1=1, axis2=2), 0.0)
+    damp = damp.at[:, np.arange(3), np.arange(3)].set(diagonal)
+    damp = airborne[:, None, None] * damp
+    fx, fy = airborne * f.drawbar_pull, airborne * f.lateral_force
+    mw, mz = airborne * f.resisting_torque, airborne * f.aligning_torque
+    force = fx[:, None] * heading + fy[:, None] * lateral
+    torque = -mw[:, None] * axle + mz[:, None] * normal
+    rows_out = jnp.stack([heading, lateral, axle, normal], 1)  # (n, 4, 3)
+    out = MjxWheelForces(
+        load=load,
+        speed=vx,
+        lateral_speed=vy,
+        slip_angle=f.slip_angle,
+        wheel_speed=spin,
+        slip=f.slip,
+        sinkage=f.sinkage,
+        entry_angle=f.entry_angle,
+        longitudinal_force=fx,
+        lateral_force=fy,
+        resisting_torque=mw,
+        aligning_torque=mz,
+        spin_damping=damp[:, 2, 2],
+        normal=normal,
+        status=jnp.where(valid_load, f.status, Status.INVALID_INPUT).astype(jnp.int32),
+    )
+    return jnp.concatenate([force, torque], -1), damp, rows_out, out
+
+
+def _snow_damping_matrix(m, d, wheels, damp, rows):
+    """K = sum_k G_out,k^T D_k G_in,k [N s/m ...]: G_in = (heading^T J_p, lateral^T J_p,
+    axle^T J_r) (3 x nv), G_out = G_in with normal^T J_r appended (4 x nv)."""
+    b = jnp.asarray(wheels.body_ids)
+
+    def wheel_rows(body, point, r):
+        jacp, jacr = mjx.jac(m, d, point, body)  # (nv, 3) each
+        g = jnp.stack([jacp @ r[0], jacp @ r[1], jacr @ r[2], jacr @ r[3]])
+        return g  # (4, nv)
+
+    g = jax.vmap(wheel_rows)(b, d.xipos[np.asarray(wheels.body_ids)], rows)  # (n, 4, nv)
+    return jnp.einsum("kiv,kij,kjw->vw", g, damp, g[:, :3])
+
+
+def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
+    if not isinstance(m, mjx.Model):
+        raise TypeError(f"m must be an mjx.Model (mjx.put_model), got {type(m).__name__}")
+    if not isinstance(d, mjx.Data):
+        raise TypeError(f"d must be an mjx.Data (mjx.make_data), got {type(d).__name__}")
+    if not isinstance(wheels, MjxWheels):
+        raise TypeError(f"wheels must be a snowjax.mjx.MjxWheels, got {type(wheels).__name__}")
+    _check_dynamic_shear(shear, "snowjax.mjx")
+    _check_model(wheels.wheel, snow, distribution, shear)
+    _check_parameters(wheels.wheel, snow, distribution, shear)
+    if not (np.isfinite(speed_eps) and speed_eps > 0):
+        raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
+    if m.opt.integrator != mjx.IntegratorType.EULER:
+        raise ValueError(
+            "snowjax.mjx.step needs integrator='Euler' (it adds the snow forces' slopes to"
+            f" the implicit damping); the model has {m.opt.integrator!r}"
+        )
+    if m.opt.disableflags & mjx.DisableBit.EULERDAMP:
+        raise ValueError("snowjax.mjx.step needs Euler's implicit damping (eulerdamp enabled)")
+    if max(wheels.body_ids) >= m.nbody or max(a for s in wheels.sensors for a, _ in s) >= int(
+        m.nsensordata
+    ):
+        raise ValueError("wheels do not belong to this model (body or sensor out of range)")
+
+
+def _contact_model(snow, shear, distribution, lateral):
+    """The `ContactModel` of `step`'s arguments, checked (shear, lateral law)."""
+    snow, shear, distribution, lateral, nodes = _unpack_model(
+        snow, shear, distribution, lateral=lateral
+    )
+    law = _shear_law(shear)
+    if not law.lateral:
+        raise ValueError(
+            f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
+            "shear='classic' (or 'none') with snowjax.mjx"
+        )
+    shear = _shear_name(law)
+    if lateral is None:
+        lateral = Lateral()
+    elif not isinstance(lateral, Lateral):
+        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    return snow, shear, distribution, ContactModel(snow, distribution, shear, lateral, nodes)
+
+
+def step(
+    m: mjx.Model,
+    d: mjx.Data,
+    wheels: MjxWheels,
+    snow: Terrain | ContactModel,
+    entry_angle: Float[ArrayLike, " n"] | None = None,
+    *,
+    load: Float[ArrayLike, " n"] | str | None = None,
+    shear: ShearModel | AbstractShearLaw = "classic",
+    lateral: Lateral | None = None,
+    speed_eps: float = DEFAULT_SPEED_EPS,
+    distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
+) -> tuple[mjx.Data, MjxWheelForces]:
+    """One MJX time step with the snow's forces on the wheels; pure and differentiable.
+
+    The same pipeline as `mjx.step` (`fwd_position`, sensors, `fwd_velocity`,
+    `fwd_actuation`, `fwd_acceleration`, constraint `solve`, Euler), with the wheel
+    forces computed after the velocity stage (so from the current positions and
+    velocities) and written into the wheel rows of `xfrc_applied` (those rows are
+    overwritten; other rows are kept): in the world frame at each wheel's centre of mass
+    (its axle), force `longitudinal_force * heading + lateral_force * lateral` [N] and
+    torque `-resisting_torque * axle + aligning_torque * normal` [N m].  The forces'
+    slopes w.r.t. the wheels' velocities enter the Euler update implicitly (module
+    documentation).  Public MuJoCo API only.
+
+    **Arguments:**
+
+    - `m`, `d`: `mjx.Model` (Euler integrator) and `mjx.Data`.
+    - `wheels`: `MjxWheels` of this model.
+    - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
+      `LayeredSnow`; SI), or a `ContactModel` (its shear law, distribution and lateral
+      law; then leave those keywords out).  Vmapping over its leaves runs one rollout
+      per terrain.
+    - `entry_angle`: warm start theta0 [rad] per wheel, the `entry_angle` output of the
+      previous step (None: cold start); changes only the iteration count.
+    - `load`: vertical load per wheel [N]: None (default) `wheels.static_load`, the
+      quasi-static load at rest; an array (shape () or (n,)) to prescribe it; or
+      `"contact"`: the ground's normal force on the wheel in the previous step (includes
+      load transfer and lift-off).
+    - `shear`, `lateral`, `speed_eps`, `distribution`: as in `snowjax.simulate_planar`
+      (shear model; `Lateral` law, default `Lateral()`; regularisation speed [m/s];
+      stress distribution).
+    - `ruts`: None (default: every wheel on virgin snow), or `snowjax.Ruts(k_0, a_u,
+      follows)`: the wheels run in the ruts of the wheels ahead, `follows` in
+      `MjxWheels` order (default: the last half behind the first half, as the shipped
+      rover's rear wheels behind its front wheels), each seeing the rut's depth times
+      its overlap with its leader's path (`snowjax.track_offset`, in the world's x-y
+      plane); a following wheel's `sinkage` is below its rut's floor.
+
+    **Returns:** `(next mjx.Data, MjxWheelForces)`; its `xfrc_applied` holds the snow
+    wrenches that were applied.
+
+    **Errors:** `TypeError` for arguments of the wrong type, `ValueError` for a model
+    that is not Euler-integrated, a bad `speed_eps` or `shear`, a shear model the terrain
+    does not support, a concrete terrain or wheel parameter out of `solve_wheel`'s range
+    (NaN included) or a concrete prescribed `load` that is negative or not finite.  Under
+    `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
+    `Status.INVALID_INPUT`.
+    """
+    snow, shear, distribution, contact = _contact_model(snow, shear, distribution, lateral)
+    _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
+    if isinstance(load, str) and load != "contact":
+        raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
+    if not isinstance(load, str):
+        _check_concrete("load", load, lambda x: x >= 0, ">= 0 N (0: the wheel is airborne)")
+    if load is None:
+        load = wheels.static_load
+    n = wheels.num_wheels
+    if entry_angle is not None:
+        entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
+    ruts = _resolved(ruts, n)
+
+    d = mjx.fwd_position(m, d)
+    d = mjx.sensor_pos(m, d)
+    d = mjx.fwd_velocity(m, d)
+    d = mjx.sensor_vel(m, d)
+    wrench, damp, rows, out = _snow_forces(
+        m, d, wheels, contact, entry_angle, load, float(speed_eps), ruts
+    )
+    b = np.asarray(wheels.body_ids)
+    d = d.replace(xfrc_applied=d.xfrc_applied.at[b].set(wrench.astype(d.xfrc_applied.dtype)))
+    d = mjx.fwd_actuation(m, d)
+    d = mjx.fwd_acceleration(m, d)
+    d = mjx.solve(m, d)
+    d = mjx.sensor_acc(m, d)
+    # Linearly implicit Euler in the snow forces: (M + dt (D_joint + K)) qacc = f, then
+    # MJX's own update of the state with that qacc (implicit damping switched off there).
+    dt = m.opt.timestep
+    mass = mjx.full_m(m, d) + dt * jnp.diag(m.dof_damping)
+    mass = mass + dt * _snow_damping_matrix(m, d, wheels, damp, rows)
+    qacc = jnp.linalg.solve(mass, d.qfrc_smooth + d.qfrc_constraint)
+    explicit = m.replace(
+        opt=m.opt.replace(disableflags=m.opt.disableflags | mjx.DisableBit.EULERDAMP)
+    )
+    d = mjx.euler(explicit, d.replace(qacc=qacc))
+    return d, out
+
+
+class Rollout(eqx.Module):
+    """States and wheel outputs of `rollout`, one row per step (after the step).
+
+    `time` [s], `qpos`, `qvel` (MJX's generalised coordinates and velocities, SI),
+    `wheels`: `MjxWheelForces` with a leading step axis (forces of the step that
+    produced the row), `data`: the final `mjx.Data`.
+    """
+
+    time: Float[Array, " steps"]
+    qpos: Float[Array, "steps nq"]
+    qvel: Float[Array, "steps nv"]
+    wheels: MjxWheelForces
+    data: mjx.Data
+
+
+def rollout(
+    m: mjx.Model,
+    d: mjx.Data,
+    wheels: MjxWheels,
+    snow: Terrain | ContactModel,
+    ctrl: Float[ArrayLike, "... nu"],
+    num_steps: int,
+    *,
+    entry_angle: Float[ArrayLike, " n"] | None = None,
+    load: Float[ArrayLike, " n"] | str | None = None,
+    shear: ShearModel | AbstractShearLaw = "classic",
+    lateral: Lateral | None = None,
+    speed_eps: float = DEFAULT_SPEED_EPS,
+    distribution: AbstractStressDistribution | None = None,
+    ruts: Ruts | None = None,
+) -> Rollout:
+    """`num_steps` calls of `step` in one `jax.lax.scan`, the entry angles carried along.
+
+    **Arguments:** as `step`, plus `ctrl`: actuator controls (for the shipped rover,
+    `rover_controls(steering, torque)`: steer angles [rad] and motor torques [N m]),
+    shape (nu,) held constant or (num_steps, nu) per step; `num_steps`: number of steps
+    (static int >= 1); `entry_angle`: initial warm start [rad].  Jit it yourself (e.g.
+    `jax.jit(rollout, static_argnums=5)` or inside your own jitted function); vmap it
+    over snows; differentiate it.
+
+    **Returns:** `Rollout`.
+    """
+    _, shear_name, _, contact = _contact_model(snow, shear, distribution, lateral)
+    _check_step_args(m, d, wheels, contact.terrain, shear_name, speed_eps, contact.distribution)
+    num_steps = int(num_steps)
+    if num_steps < 1:
+        raise ValueError(f"num_steps must be >= 1; got {num_steps!r}")
+    ctrl = jnp.asarray(ctrl, d.qpos.dtype)
+    if ctrl.shape == (m.nu,):
+        ctrl = jnp.broadcast_to(ctrl, (num_steps, m.nu))
+    if ctrl.shape != (num_steps, m.nu):
+        raise ValueError(
+            f"ctrl must have shape ({m.nu},) or ({num_steps}, {m.nu}); got {ctrl.shape}"
+        )
+    n = wheels.num_wheels
+    if entry_angle is None:  # NaN: solve_wheel's cold start (closed-form guess)
+        entry_angle = jnp.full((n,), jnp.nan, d.qpos.dtype)
+    entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
+
+    def body(carry, u):
+        data, theta = carry
+        data, out = step(
+            m, data.replace(ctrl=u), wheels, contact, theta, load=load, speed_eps=speed_eps,
+            ruts=ruts,
+        )  # fmt: skip
+        theta = jax.lax.stop_gradient(
+            jnp.where(jnp.isfinite(out.entry_angle), out.entry_angle, theta)
+        )
+        return (data, theta), (data.time, data.qpos, data.qvel, out)
+
+    (data, _), (time, qpos, qvel, outs) = jax.lax.scan(body, (d, entry_angle), ctrl)
+    return Rollout(time=time, qpos=qpos, qvel=qvel, wheels=outs, data=data)
