@@ -22,7 +22,7 @@ import scipy.optimize
 
 import snowjax as sj
 from snowjax import Status
-from snowjax._sim.levenberg_marquardt import _LevenbergMarquardt
+from snowjax._sim.levenberg_marquardt import _LevenbergMarquardt, _PassiveBlockSolver
 
 from .notebook_runner import outputs_text, run_notebook
 
@@ -364,7 +364,8 @@ def test_notebook_runs(tmp_path):
 RADIUS = float(WHEEL.diameter) / 2
 COASTING = jnp.array([3.0, 0.0, 3.0 / RADIUS, 3.0 / RADIUS])  # (v, x, omega_1, omega_2)
 TOL = 1e-9  # the simulation's float64 rtol = atol
-# How the simulation differentiates each implicit step (`snowjax/_sim/stepping.py`).
+# How the simulation differentiates each implicit step (`snowjax/_sim/stepping.py`; its
+# `_PassiveBlockSolver` solves the block of the state so).
 STEP_ADJOINT = optx.ImplicitAdjoint(linear_solver=lx.AutoLinearSolver(well_posed=False))
 
 
@@ -447,3 +448,44 @@ def test_optimistix_root_finders_cannot_replace_the_damped_newton():
             continue
         assert sol.result != optx.RESULTS.successful, type(solver).__name__
         assert float(jnp.max(jnp.abs(step(sol.value, SNOW.p_w)))) > 1e-2
+
+
+def _passive_residual(z, theta):
+    """Active rows r(a, theta) = 0 (a: 2 unknowns) and passive rows p - g(a, theta) (3)."""
+    a, p = z[:2], z[2:]
+    r = jnp.stack([a[0] ** 3 + a[0] - theta[0], a[1] - jnp.sin(a[0]) * theta[1]])
+    g = jnp.stack([a[0] * a[1], jnp.exp(a[0]) + theta[0], theta[1] ** 2 * a[1]])
+    return jnp.concatenate([r, p - g]), a[0]
+
+
+def test_passive_unknowns_are_the_outputs_at_the_root_with_their_derivatives():
+    """How the simulations carry the saved wheel outputs (`_LevenbergMarquardt(passive=k)`,
+    `_PassiveBlockSolver`): the passive unknowns equal g at the root of the active rows,
+    and their forward- and reverse-mode derivatives (the reverse mode through the
+    solver's transpose) are those of g(a(theta), theta), here against the root of the
+    active rows alone followed by g."""
+
+    def passive(theta):
+        solver = _LevenbergMarquardt(rtol=1e-12, atol=1e-12, passive=3)
+        adjoint = optx.ImplicitAdjoint(linear_solver=_PassiveBlockSolver(passive=3))
+        sol = optx.root_find(
+            _passive_residual, solver, jnp.zeros(5), theta, has_aux=True, adjoint=adjoint
+        )
+        return sol.value
+
+    def separate(theta):
+        def active(a, theta):
+            residual, _ = _passive_residual(jnp.concatenate([a, jnp.zeros(3)]), theta)
+            return residual[:2]
+
+        solver = _LevenbergMarquardt(rtol=1e-12, atol=1e-12)
+        a = optx.root_find(active, solver, jnp.zeros(2), theta, adjoint=STEP_ADJOINT).value
+        residual, _ = _passive_residual(jnp.concatenate([a, jnp.zeros(3)]), theta)
+        return jnp.concatenate([a, -residual[2:]])
+
+    theta = jnp.array([2.0, 0.7])
+    np.testing.assert_allclose(passive(theta), separate(theta), rtol=1e-12)
+    for jacobian in (jax.jacfwd, jax.jacrev):
+        np.testing.assert_allclose(
+            jacobian(passive)(theta), jax.jacfwd(separate)(theta), rtol=1e-10, atol=1e-14
+        )

@@ -19,6 +19,7 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import optimistix as optx
 from jaxtyping import Array
 
@@ -62,12 +63,22 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
     at local minima of |f| that are not roots); the result is then the last accepted
     iterate plus the Newton step computed there (the aux, the entry angles, is that of
     the accepted iterate).
+
+    **Passive unknowns.**  The last `passive` unknowns p, with residual rows `p - g(a)`
+    for a function g of the other ("active") unknowns a only, are carried along: the
+    damping, the merit, the gain ratio and the convergence test see the active rows only
+    (the active iterates are those of a solve without them, to rounding), the Jacobian
+    is taken along the active directions only, and each step sets p to the
+    linearisation `g(a_acc) + dg/da (a - a_acc)` (exact Newton on the passive rows).
+    The result's p is thus g at the result's a up to the second-order term of the last
+    Newton step.  The simulations carry the saved wheel outputs this way (`stepping.py`).
     """
 
     rtol: float
     atol: float
     norm: Callable = optx.max_norm
     initial_damping: float = 1e-8
+    passive: int = eqx.field(static=True, default=0)
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags):
         def nan_like(s):
@@ -80,7 +91,7 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         return _LMState(
             y_acc=y,
             f_acc=jnp.full(f_struct.shape, jnp.inf, f_struct.dtype),
-            jac_acc=jnp.eye(n, dtype=y.dtype),
+            jac_acc=jnp.eye(n, n - self.passive, dtype=y.dtype),
             merit_acc=inf,
             aux_acc=jax.tree_util.tree_map(nan_like, aux_struct),
             direction=jnp.zeros_like(y),
@@ -101,10 +112,11 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         def tangent(direction):
             return jax.jvp(lambda z: fn(z, args), (y,), (direction,), has_aux=True)
 
-        eye = jnp.eye(y.shape[0], dtype=y.dtype)
-        f, jac, aux = jax.vmap(tangent, out_axes=(None, 1, None))(eye)
-        merit = 0.5 * jnp.sum(f**2)
-        finite = jnp.isfinite(merit) & jnp.all(jnp.isfinite(jac))
+        m = y.shape[0] - self.passive  # active unknowns, first
+        basis = jnp.eye(y.shape[0], m, dtype=y.dtype)  # columns: the active unit vectors
+        f, jac, aux = jax.vmap(tangent, in_axes=1, out_axes=(None, 1, None))(basis)
+        merit = 0.5 * jnp.sum(f[:m] ** 2)
+        finite = jnp.isfinite(merit) & jnp.all(jnp.isfinite(jac[:m]))
         first = ~jnp.isfinite(state.merit_acc)
         gain = (state.merit_acc - merit) / jnp.maximum(
             state.merit_acc - state.predicted, jnp.finfo(y.dtype).tiny
@@ -119,12 +131,14 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         damping = jnp.where(accept, state.damping * shrink, state.damping * state.growth)
         growth = jnp.where(accept, 2.0, 2 * state.growth)
         damping, growth = damping.astype(y.dtype), growth.astype(y.dtype)
-        direction = _lm_direction(jac_acc, f_acc, damping)
-        predicted = 0.5 * jnp.sum((f_acc + jac_acc @ direction) ** 2)
+        active = _lm_direction(jac_acc[:m], f_acc[:m], damping)
+        predicted = 0.5 * jnp.sum((f_acc[:m] + jac_acc[:m] @ active) ** 2)
+        # The passive rows p - g(a) are linear in p with unit slope: their Newton step.
+        direction = jnp.concatenate([active, -f_acc[m:] - jac_acc[m:] @ active])
         # Only a small residual counts: small steps alone also happen at a local minimum
         # of |f| that is not a root (then the step fails and is retried, smaller).
-        scale = self.atol + self.rtol * jnp.abs(y_acc)
-        converged = accept & (self.norm(f / scale) <= 1.0)
+        scale = self.atol + self.rtol * jnp.abs(y_acc[:m])
+        converged = accept & (self.norm(f[:m] / scale) <= 1.0)
         stuck = first & ~finite
         new_state = _LMState(
             y_acc=y_acc,
@@ -149,3 +163,46 @@ class _LevenbergMarquardt(optx.AbstractRootFinder):
         # computed: taking it squares the error, at no cost.  The aux stays that of y_acc.
         final = state.y_acc + jnp.where(state.converged, state.direction, 0.0)
         return final, state.aux_acc, {}
+
+
+class _PassiveBlockSolver(lx.AbstractLinearSolver):
+    """Linear solver for the implicit-function-theorem system of a root find with
+    `passive` trailing unknowns (`_LevenbergMarquardt`): the Jacobian of the residual
+    `(r(a), p - g(a))` w.r.t. `(a, p)` is `J = [[A, 0], [B, I]]` (A = dr/da,
+    B = -dg/da).  Only the active columns `[A; B]` are computed (forward-mode tangents
+    along the active unit vectors, as in the root finder) instead of the whole Jacobian
+    that `lineax.SVD` materialises; then `J x = b` is `A x_a = b_a` (`lineax.SVD`: a
+    least-squares solution that never raises on a singular A, as the simulations'
+    steps need) and `x_p = b_p - B x_a`, and `J^T x = b` is `x_p = b_p`,
+    `A^T x_a = b_a - B^T b_p`.  Flat (1-D) unknowns and residuals, real."""
+
+    passive: int = eqx.field(static=True)
+
+    def init(self, operator, options):
+        n = operator.in_size()
+        m = n - self.passive
+        basis = jnp.eye(n, m, dtype=operator.in_structure().dtype)
+        columns = jax.vmap(operator.mv, in_axes=1, out_axes=1)(basis)
+        inner = lx.SVD().init(lx.MatrixLinearOperator(columns[:m]), options)
+        return inner, columns[m:], False
+
+    def compute(self, state, vector, options):
+        inner, below, transposed = state
+        m = vector.shape[0] - self.passive
+        top, bottom = vector[:m], vector[m:]
+        if transposed:
+            x_a, result, _ = lx.SVD().compute(inner, top - below.T @ bottom, options)
+            return jnp.concatenate([x_a, bottom]), result, {}
+        x_a, result, _ = lx.SVD().compute(inner, top, options)
+        return jnp.concatenate([x_a, bottom - below @ x_a]), result, {}
+
+    def transpose(self, state, options):
+        inner, below, transposed = state
+        inner, options = lx.SVD().transpose(inner, options)
+        return (inner, below, not transposed), options
+
+    def conj(self, state, options):
+        return state, options
+
+    def assume_full_rank(self):
+        return False

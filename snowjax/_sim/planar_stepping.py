@@ -6,14 +6,14 @@ stepping is the longitudinal simulation's (`stepping.py`): implicit Euler steps 
 `diffrax.diffeqsolve`, each solved by the damped Newton iteration of
 `levenberg_marquardt.py`, a step that is not solved retried as smaller steps, and the
 wheels' entry angles carried in the solver state as the warm start of the next
-`solve_wheel`.  Only the ODE term (`_PlanarTerm`) and the shape of the warm start (four
-wheels) are this module's own.
+`solve_wheel`; the saved wheel outputs are those of the steps' own solves.  Only the ODE
+term (`_PlanarTerm`) and the shape of the warm start (four wheels) are this module's own.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, cast
+from typing import Any, ClassVar, cast
 
 import diffrax
 import equinox as eqx
@@ -56,10 +56,24 @@ class _PlanarTerm(_WarmStartTerm):
     speed_eps: float = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
     ruts: Ruts | None = None
+    OUTPUTS: ClassVar = (
+        "drawbar_pull",
+        "lateral_force",
+        "resisting_torque",
+        "aligning_torque",
+        "sinkage",
+        "entry_angle",
+        "slip",
+        "slip_angle",
+    )
+
+    def steer(self, t, y):
+        """Steer angles (4,) [rad] at time t [s] and state y (10,)."""
+        return self.vehicle.steer_angles(_steering_at(self.steering, t, y))
 
     def forces(self, t, y, hint):
         """(steer angles (4,) [rad], wheel forces) at time t [s] and state y (10,)."""
-        steer = self.vehicle.steer_angles(_steering_at(self.steering, t, y))
+        steer = self.steer(t, y)
         f = _planar_wheel_forces(
             self.vehicle,
             self.contact,
@@ -76,6 +90,7 @@ class _PlanarTerm(_WarmStartTerm):
         return steer, f
 
     def vf(self, t, y, args):
+        y = y[0]
         steer, f = self.forces(t, y, args)
         fx, fy, moment = _body_forces(self.vehicle, f, steer)
         yaw, u, v, r = y[2], y[3], y[4], y[5]
@@ -94,7 +109,7 @@ class _PlanarTerm(_WarmStartTerm):
             ]
         )
         domega = (applied - f.resisting_torque) / inertia
-        return jnp.concatenate([rates, domega]), f.entry_angle
+        return jnp.concatenate([rates, domega]), f.entry_angle, self.pack(f), f.status
 
     def num_wheels(self, y0):
         return NUM_WHEELS
@@ -102,11 +117,10 @@ class _PlanarTerm(_WarmStartTerm):
 
 @eqx.filter_jit
 def _simulate_planar_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
-    save_ts, sol = _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps)
-    ys = sol.ys
-    assert ys is not None  # saveat=SaveAt(ts=...) saves the states
-    # Wheel outputs at the saved states: one batched (cold-started) equilibrium solve.
-    steer, f = jax.vmap(lambda t, y: term.forces(t, y, None))(save_ts, ys)
+    save_ts, ys, f, status, result = _integrate(
+        term, y0, n_steps, dt, save_every, adjoint, newton_steps
+    )
+    steer = jax.vmap(term.steer)(save_ts, ys)
     applied = jax.vmap(lambda t, y: _torque_at(term.torque, t, y[3], y[6:]))(save_ts, ys)
     return PlanarTrajectory(
         time=save_ts,
@@ -118,17 +132,10 @@ def _simulate_planar_jit(term, y0, n_steps, dt, save_every, adjoint, newton_step
         yaw_rate=ys[:, 5],
         wheel_speed=ys[:, 6:],
         steer_angle=steer,
-        slip=f.slip,
-        slip_angle=f.slip_angle,
-        sinkage=f.sinkage,
-        entry_angle=f.entry_angle,
-        drawbar_pull=f.drawbar_pull,
-        lateral_force=f.lateral_force,
-        resisting_torque=f.resisting_torque,
-        aligning_torque=f.aligning_torque,
         applied_torque=applied,
-        status=f.status,
-        result=sol.result,
+        status=status,
+        result=result,
+        **f,
     )
 
 
@@ -265,8 +272,8 @@ def simulate_planar(
     - `newton_steps`: iteration limit of each implicit step's Newton solve.
     - `wheel_max_steps`: Newton iteration limit of each wheel equilibrium (`solve_wheel`'s
       `max_steps`).  The default 5 is `solve_wheel`'s batch-wide first phase only:
-      warm-started, the equilibria converge in one to three steps, and cold (the first
-      step, the saved states) within five on the snows checked (the thesis's fresh and
+      warm-started, the equilibria converge in one to three steps, and cold (the initial
+      state, the first step) within five on the snows checked (the thesis's fresh and
       plate-rule snows and `BekkerSoil.snow_us`, 1-8 kN, slips -1 to 1, slip angles up to
       85 degrees); without the straggler phase the program compiles in about 70 % of the
       time.  An equilibrium not converged within the limit shows as
