@@ -11,7 +11,7 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._sim.planar import _frame_forces
+from .._sim.planar import _frame_forces, _steered_model
 from .._sim.vehicle import (
     DEFAULT_SPEED_EPS,
     _check_concrete,
@@ -23,9 +23,9 @@ from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import Status, _check_model
 from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.model import ContactModel
 from .._wheel.passes import Ruts, _follower_overlap, _levels, _resolved
-from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
+from .._wheel.shear_law import AbstractShearLaw
 from .wheels import MjxWheels, _ground, mjx
 
 __all__ = ["MjxWheelForces", "Rollout", "step", "rollout"]
@@ -212,20 +212,9 @@ def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
 
 def _contact_model(snow, shear, distribution, lateral):
     """The `ContactModel` of `step`'s arguments, checked (shear, lateral law)."""
-    snow, shear, distribution, lateral, nodes = _unpack_model(
-        snow, shear, distribution, lateral=lateral
+    snow, shear, distribution, lateral, nodes = _steered_model(
+        snow, shear, distribution, lateral, None, "snowjax.mjx"
     )
-    law = _shear_law(shear)
-    if not law.lateral:
-        raise ValueError(
-            f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
-            "shear='classic' (or 'none') with snowjax.mjx"
-        )
-    shear = _shear_name(law)
-    if lateral is None:
-        lateral = Lateral()
-    elif not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
     return snow, shear, distribution, ContactModel(snow, distribution, shear, lateral, nodes)
 
 

@@ -86,7 +86,10 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import AbstractWheel
+from .._wheel.lateral import Lateral
+from .._wheel.model import _unpack_model
 from .._wheel.passes import _follower_overlap, _in_tracks
+from .._wheel.shear_law import _shear_law, _shear_name
 from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
@@ -219,6 +222,27 @@ class SteeringProfile(eqx.Module):
         """Steering input [rad] at time t [s].  `state` unused."""
         del state
         return jnp.interp(t, self.times, self.values)
+
+
+def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
+    """(terrain, shear name, distribution, lateral law, nodes per panel) of a steered
+    wheel's arguments (`simulate_planar`, `snowjax.mjx`): a `ContactModel` unpacked, the
+    shear law checked to have a lateral counterpart, the lateral law defaulted to
+    `Lateral()` and checked.  `who` names the caller in the errors."""
+    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
+    )
+    law = _shear_law(shear)
+    if not law.lateral:
+        raise ValueError(
+            f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
+            f"shear='classic' (or 'none') with {who}."
+        )
+    if lateral is None:
+        lateral = Lateral()
+    elif not isinstance(lateral, Lateral):
+        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    return snow, _shear_name(law), distribution, lateral, nodes_per_panel
 
 
 def _check_steering_profile(profile: SteeringProfile) -> None:

@@ -27,9 +27,9 @@ from .._terrain.base import Terrain
 from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.model import ContactModel
 from .._wheel.passes import Ruts, _resolved
-from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
+from .._wheel.shear_law import AbstractShearLaw
 from .planar import (
     NUM_WHEELS,
     PlanarTrajectory,
@@ -38,6 +38,7 @@ from .planar import (
     _body_forces,
     _check_steering_profile,
     _planar_wheel_forces,
+    _steered_model,
     _steering_at,
 )
 from .stepping import _check_run, _integrate, _WarmStartTerm
@@ -309,22 +310,11 @@ def simulate_planar(
     that cannot be solved even after the retries stops the integration: `result` is set
     (no exception) and the remaining rows hold inf states.
     """
-    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
-        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
+    snow, shear, distribution, lateral, nodes_per_panel = _steered_model(
+        snow, shear, distribution, lateral, nodes_per_panel, "simulate_planar"
     )
-    law = _shear_law(shear)
-    if not law.lateral:
-        raise ValueError(
-            f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
-            "shear='classic' (or 'none') with simulate_planar."
-        )
-    shear = _shear_name(law)
     if not isinstance(vehicle, PlanarVehicle):
         raise TypeError(f"vehicle must be a PlanarVehicle, got {type(vehicle).__name__}")
-    if lateral is None:
-        lateral = Lateral()
-    elif not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
     n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)
     if int(wheel_max_steps) < 1:
         raise ValueError(f"wheel_max_steps must be a positive integer; got {wheel_max_steps!r}")
