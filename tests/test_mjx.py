@@ -156,7 +156,8 @@ def test_steady_turn_radius_matches_simulate_planar(rover, run):
     """0.2 rad of (Ackermann) steering at 540 N m per wheel from 2 m/s: the turning radius
     |v| / yaw rate of the chassis agrees with `simulate_planar`'s for the same vehicle
     (mass, yaw inertia about the centre of mass from MuJoCo's mass matrix, wheels, loads)
-    within 2 % (measured: 1e-4 to 3e-4) at 1, 2 and 3 s."""
+    within 2 % (measured: 0.5, 0.6 and 1.0 %) at 1, 2 and 3 s, as the rover speeds up and
+    its turn tightens (from 12 to 9 m)."""
     model, _, _, _ = rover
     delta, speed, slip = 0.2, 2.0, 0.2
     r = run(_moving(rover, speed, slip), smjx.rover_controls(delta, jnp.full(4, TORQUE)), SNOW)
