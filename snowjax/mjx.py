@@ -60,8 +60,8 @@ accepted.
 **Gradients.**  Forward mode (`jax.jvp`, `jax.jacfwd`) works through `step` and `rollout`
 with any MJX settings and is the cheap choice for a few parameters (snow, controls).
 Reverse mode (`jax.grad`) needs MJX's `opt.iterations = 1` (its constraint solver is a
-`while_loop` otherwise), too inexact a contact solve for the shipped rover, so
-differentiate it in forward mode.
+`while_loop` otherwise); it is not tested on the shipped rover (the planar vehicle this
+bridge used to ship bounced with one iteration), so differentiate it in forward mode.
 
 **Many environments on a CPU.**  MJX's own `mjx.step` on the shipped rover (which has
 joint damping) hung when vmapped over 256 or more environments on a 2-core CPU (jaxlib
