@@ -31,6 +31,7 @@ import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402
 from snowjax import mjx as smjx  # noqa: E402
 
+from .notebook_runner import outputs_text, run_notebook  # noqa: E402
 from .test_sim import LOAD, VEHICLE, _parameters, _run  # noqa: E402
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -324,6 +325,16 @@ def test_evolution_strategies_example_improves_its_objective():
     )
     assert abs(history[0]) < 1e-3  # the zero policy does not move
     assert history[-1] > history[0] + 0.3
+
+
+# The notebook's kernel compiles its own vmapped forward-mode rollout (about a minute on
+# 2 cores): `make test-all` runs it.
+@pytest.mark.slow
+def test_notebook_runs(tmp_path):
+    nb = run_notebook("mjx_vehicle.ipynb", tmp_path)
+    text = outputs_text(nb)
+    assert "d distance / d p_w" in text
+    assert "firm: distance" in text
 
 
 def test_traced_bad_prescribed_loads_are_flagged(rover):
