@@ -44,11 +44,12 @@ class MjxWheelForces(eqx.Module):
       `lateral_speed`: along the axle's projection on the ground (positive to the
       wheel's left) [m/s]; `slip_angle`: beta of `snowjax.planar_wheel_kinematics` [rad].
     - `wheel_speed`: spin about the axle, world frame [rad/s].
-    - `slip`: slip i [-]; `sinkage`: z0 [m]; `entry_angle`: theta0 [rad] (pass it back).
-    - `longitudinal_force`: drawbar pull applied along the heading [N];
+    - `slip`: slip i (eq. 2.6) [-]; `sinkage`: z0 (4.15) [m]; `entry_angle`: theta0
+      [rad] (pass it back).
+    - `longitudinal_force`: drawbar pull (2.10) applied along the heading [N];
       `lateral_force`: applied along the axle's ground projection [N];
-      `resisting_torque`: M_w applied against the spin [N m]; `aligning_torque`: M_z
-      applied about the ground normal [N m] (all after the lift-off and rest
+      `resisting_torque`: M_w (2.12) applied against the spin [N m]; `aligning_torque`:
+      M_z applied about the ground normal [N m] (all after the lift-off and rest
       regularisations).
     - `spin_damping`: c = dM_w/domega >= 0 used implicitly [N m s/rad].
     - `normal`: the ground's unit normal under the wheel (world frame) [-], shape (n, 3).
