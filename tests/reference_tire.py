@@ -2,7 +2,8 @@
 
 Written from the model's equations (Bekker 1969 / Wong, *Theory of Ground Vehicles*,
 section 2.5: a flat of pressure p_f at the sinkage where the terrain's law reaches it,
-a chord of the undeflected circle; the smooth switch of `snowjax._wheel.tire`), with
+a chord of the undeflected circle, carrying p_f under every distribution; the smooth
+switch of `snowjax._wheel.tire`), with
 `scipy.integrate.quad` and `scipy.optimize.brentq`; it shares no code with snowjax.  The
 flat is integrated in its own coordinate x (not as a part of the rim), the curved
 regions in theta; the law is inverted by brentq, not by a closed form.
@@ -20,7 +21,8 @@ from scipy import integrate, optimize
 
 
 def flat(theta0, D, b, law, p_cap, m):
-    """(z_f, delta, theta_f): the flat's sinkage, the deflection and the flat's half-angle."""
+    """(z_f, delta, theta_f, p_f): the flat's sinkage, the deflection, the flat's
+    half-angle and its pressure."""
     s = D / 2 * (1 - math.cos(theta0))
     rim = law(s, b)
     log_rim = math.log(rim) if rim > 0 else -math.inf
@@ -31,13 +33,13 @@ def flat(theta0, D, b, law, p_cap, m):
     else:
         z_f = optimize.brentq(lambda z: law(z, b) - p_f, 0.0, s, xtol=1e-17, rtol=1e-15)
     delta = s - z_f
-    return z_f, delta, 2 * math.asin(math.sqrt(max(delta, 0.0) / D))
+    return z_f, delta, 2 * math.asin(math.sqrt(max(delta, 0.0) / D)), p_f
 
 
 def contact(theta0, slip, D, b, law, c, tan_phi, K, p_cap, m, fm=0.0, fr=0.0):
     """(W, R, T, M) of the deflecting tyre at entry angle theta0, by adaptive quadrature."""
     r = D / 2
-    z_f, delta, th_f = flat(theta0, D, b, law, p_cap, m)
+    z_f, delta, th_f, p_f = flat(theta0, D, b, law, p_cap, m)
     x_f = r * math.sin(th_f)  # the flat spans -x_f..x_f
     tm, tr = fm * theta0, fr * theta0
     x_r = max(r * math.sin(tr), -x_f)  # the flat's rear end inside the contact
@@ -66,9 +68,8 @@ def contact(theta0, slip, D, b, law, c, tan_phi, K, p_cap, m, fm=0.0, fr=0.0):
         cs, sn = math.cos(th), math.sin(th)
         return np.array([sig * cs + t * sn, sig * sn, t * cs, t * r]) * r
 
-    def on_flat(x):  # per dx: (W, R, T, M)
-        th = math.asin(x / r)
-        sig = law(depth(th), b)
+    def on_flat(x):  # per dx: (W, R, T, M); the flat carries p_f (elastic mode)
+        sig = p_f
         j = r * (theta0 - th_f) + (x_f - x) - (1 - slip) * r * (math.sin(theta0) - x / r)
         t = tau(sig, j)
         return np.array([sig, 0.0, t, t * (r - delta) + sig * x])

@@ -98,6 +98,12 @@ class AbstractTerrain(eqx.Module):
         """Depth of the hard base below the surface [m]; `inf` when there is none."""
         return jnp.full_like(jnp.asarray(self.cohesion), jnp.inf)
 
+    def has_base(self) -> bool:
+        """Whether the law has a hard base at a finite depth (static): whether the class
+        overrides `depth`.  The contact quadrature then grades its nodes towards the
+        lowest point of a front-region contact, where a law such as Wong's diverges."""
+        return type(self).depth is not AbstractTerrain.depth
+
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """Sinkages [m] where the pressure–sinkage law has a kink or a jump (none)."""
         return ()
@@ -149,27 +155,7 @@ class AbstractTerrain(eqx.Module):
         respect to the pressure, the width and every parameter.  A law with a closed
         form overrides it.
         """
-        p = jnp.asarray(pressure)
-        limit = jnp.asarray(limit)
-        shape = jnp.broadcast_shapes(p.shape, limit.shape)
-        lo = jnp.zeros(shape, jnp.result_type(p, limit, float))
-        hi = jnp.broadcast_to(limit, shape).astype(lo.dtype)
-        law = jax.lax.stop_gradient(self)
-        p_stop = jax.lax.stop_gradient(p)
-
-        def halve(_, bounds):
-            lo, hi = bounds
-            mid = 0.5 * (lo + hi)
-            below = law.pressure(mid, jax.lax.stop_gradient(width)) < p_stop
-            return jnp.where(below, mid, lo), jnp.where(below, hi, mid)
-
-        _, z = jax.lax.fori_loop(0, 64, halve, (lo, hi))
-        z = jax.lax.stop_gradient(z)
-        sigma, slope = jax.jvp(lambda x: law.pressure(x, width), (z,), (jnp.ones_like(z),))
-        reached = (sigma >= p_stop) & (slope > 0) & jnp.isfinite(slope)
-        safe_slope = jax.lax.stop_gradient(jnp.where(reached, slope, 1.0))
-        correction = (self.pressure(z, width) - jax.lax.stop_gradient(sigma)) - (p - p_stop)
-        return jnp.where(reached, z - correction / safe_slope, hi)
+        return _bisect_pressure(self, pressure, width, 0.0, limit)
 
     def constraints(self, shear: str = "classic") -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range).
@@ -224,3 +210,33 @@ def _terrain_parameter_infos(terrain) -> dict[str, ParameterInfo]:
         if info is None and name in _STRENGTH:
             infos[name] = _STRENGTH[name]
     return infos
+
+
+def _bisect_pressure(terrain, pressure, width, lower, upper) -> Array:
+    """The sinkage z [m] in [`lower`, `upper`] at which `terrain`'s law reaches `pressure`
+    [Pa] (width b [m]), `upper` where it stays below it up to there: 64 bisection
+    halvings, then one Newton correction whose derivative is held fixed, which gives the
+    exact first derivatives of the root (implicit function theorem) with respect to the
+    pressure, the width and every parameter (`AbstractTerrain.sinkage_at_pressure`)."""
+    p = jnp.asarray(pressure)
+    upper = jnp.asarray(upper)
+    shape = jnp.broadcast_shapes(p.shape, upper.shape, jnp.shape(lower))
+    dtype = jnp.result_type(p, upper, float)
+    lo = jax.lax.stop_gradient(jnp.broadcast_to(jnp.asarray(lower, dtype), shape))
+    hi = jnp.broadcast_to(upper, shape).astype(dtype)
+    law = jax.lax.stop_gradient(terrain)
+    p_stop = jax.lax.stop_gradient(p)
+
+    def halve(_, bounds):
+        lo, hi = bounds
+        mid = 0.5 * (lo + hi)
+        below = law.pressure(mid, jax.lax.stop_gradient(width)) < p_stop
+        return jnp.where(below, mid, lo), jnp.where(below, hi, mid)
+
+    _, z = jax.lax.fori_loop(0, 64, halve, (lo, jax.lax.stop_gradient(hi)))
+    z = jax.lax.stop_gradient(z)
+    sigma, slope = jax.jvp(lambda x: law.pressure(x, width), (z,), (jnp.ones_like(z),))
+    reached = (sigma >= p_stop) & (slope > 0) & jnp.isfinite(slope)
+    safe_slope = jax.lax.stop_gradient(jnp.where(reached, slope, 1.0))
+    correction = (terrain.pressure(z, width) - jax.lax.stop_gradient(sigma)) - (p - p_stop)
+    return jnp.where(reached, z - correction / safe_slope, hi)

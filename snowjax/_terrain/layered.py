@@ -120,6 +120,15 @@ class LayeredSnow(AbstractTerrain):
         """bottom.z_w: depth of the frozen ground [m]."""
         return self.bottom.z_w
 
+    def pressure_at_clearance(self, clearance, width=None):
+        """The law at `clearance` [m] above the frozen ground [Pa]: the bottom layer's
+        Wong law written without cancellation (`WongSnow.pressure_at_clearance`) below
+        the ice's failure, the law itself above it."""
+        sinkage = self.depth - clearance
+        after = sinkage >= self.failure_sinkage
+        below_ice = self.bottom.pressure_at_clearance(jnp.where(after, clearance, self.depth))
+        return jnp.where(after, below_ice, self.pressure(jnp.where(after, 0.0, sinkage), width))
+
     def constraints(self, shear: str = "classic"):
         bottom_deeper = self.bottom.z_w > self.top.z_w
         return [

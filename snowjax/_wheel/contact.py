@@ -52,10 +52,16 @@ from jaxtyping import Array, ArrayLike, Float
 from .._leaves import _is_traced
 from .._terrain.base import AbstractTerrain
 from .distribution import AbstractStressDistribution, _as_distribution, _is_front
-from .general import _power_map, _rule, _sinh_offsets, _tread_terms, general_contact
+from .general import (
+    _power_map,
+    _rule,
+    _sinh_offsets,
+    _stresses_at,
+    _tread_terms,
+    general_contact,
+)
 from .geometry import (
     AbstractWheel,
-    _rim_sinkage_between,
     _shear_displacement,
     _sincos_half,
     max_sinkage,
@@ -121,12 +127,11 @@ def normal_stress(
 def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution, tread):
     """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain (a
     deflecting tyre's flat, `tread`, at its sinkage)."""
-    theta0 = jnp.asarray(entry_angle)
-    stress_angle = distribution.stress_angle(jnp.asarray(theta), theta0, slip)
-    z = _rim_sinkage_between(stress_angle, theta0, wheel.diameter)
-    if tread is not None:
-        z = jnp.minimum(z, tread.sinkage)
-    return terrain.rim_properties(z, wheel.width)
+    theta0, theta = jnp.asarray(entry_angle), jnp.asarray(theta)
+    stress_angle = distribution.stress_angle(theta, theta0, slip)
+    return _stresses_at(
+        theta, stress_angle, theta0, wheel.diameter, terrain, wheel.width, tread, guard=False
+    )
 
 
 def shear_stress(

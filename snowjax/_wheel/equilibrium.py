@@ -201,13 +201,16 @@ def _entry_angle_cap(depth, diameter):
     arccos(1 - 2 depth / D) capped at 85 degrees, and whether the base lies within it.
 
     The base angle is pi for a layer deeper than the wheel and for an infinitely deep
-    terrain; `where` keeps gradients finite there (arccos' is infinite at -1, and
-    reverse mode would otherwise form 0 * inf w.r.t. the diameter).
+    terrain, 0 for a base at the surface; `where` keeps gradients finite there (arccos'
+    is infinite at +-1, and reverse mode would otherwise form 0 * inf w.r.t. the
+    diameter).
     """
     finite = jnp.isfinite(depth)
     cos_base = jnp.where(finite, 1 - 2 * jnp.where(finite, depth, 0.0) / diameter, -jnp.inf)
-    inside = cos_base > -1
+    inside = (cos_base > -1) & (cos_base < 1)
     theta_base = jnp.where(inside, jnp.arccos(jnp.where(inside, cos_base, 0.0)), jnp.pi)
+    # A base at the surface (a rut pressed to the base): no contact, a finite gradient.
+    theta_base = jnp.where(cos_base >= 1, 0.0, theta_base)
     return jnp.minimum(theta_base, MAX_ENTRY_ANGLE), theta_base <= MAX_ENTRY_ANGLE
 
 
@@ -305,8 +308,9 @@ def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
     lower, upper = s_grid[k], s_grid[k + 1]
     w_lo = jnp.take_along_axis(w_grid, k[None], 0)[0]
     w_hi = jnp.take_along_axis(w_grid, k[None] + 1, 0)[0]
-    f_lo = jnp.log(jnp.maximum(w_lo, 1e-300) / target)
-    f_hi = jnp.log(jnp.maximum(w_hi, 1e-300) / target)
+    tiny = jnp.finfo(dtype).tiny  # (1e-300 is 0 in float32: log(0 / target) - log(0) is NaN)
+    f_lo = jnp.log(jnp.maximum(w_lo, tiny) / target)
+    f_hi = jnp.log(jnp.maximum(w_hi, tiny) / target)
     frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
     return over, target, lower, upper, jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
 
@@ -340,7 +344,7 @@ def _solve_layout(
     differentiable = (wheel, terrain, distribution, load, slip, side)
     wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
     tol = _tolerance(load.dtype)
-    reach = type(wheel).deepest_reach(wheel, terrain.depth)
+    reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap, reaches_base = _entry_angle_cap(reach, wheel.diameter)
     contact = functools.partial(
         _contact_batch,
@@ -361,18 +365,22 @@ def _solve_layout(
         vertical, theta_cap, load, slip, guess, wheel, terrain, shear
     )
 
+    # An element the layer cannot carry is held at the cap (`forces`): its residual is 0,
+    # so it leaves the batch's Newton iteration at once (a layer that carries nothing,
+    # e.g. a rut pressed to the base, has no positive target to solve for).
+    target = jnp.where(over, load, target)
+
     def residual(s, params):
-        th_cap, tgt, *element = params
-        return _balance_residual(
-            contact(_theta_from_s(s, th_cap), *element, vertical_only=True), tgt
-        )
+        th_cap, tgt, held, *element = params
+        w = contact(_theta_from_s(s, th_cap), *element, vertical_only=True)
+        return jnp.where(held, 0.0, _balance_residual(w, tgt))
 
     s = solve_elementwise(
         residual,
         jnp.clip(s0, lower, upper),
         lower,
         upper,
-        (theta_cap, target, slip, wheel, terrain, distribution, side),
+        (theta_cap, target, over, slip, wheel, terrain, distribution, side),
         tol,
         max_steps,
     )
@@ -387,7 +395,7 @@ def _solve_layout(
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
     wheel, terrain, distribution, load, slip, side = differentiable
-    reach = type(wheel).deepest_reach(wheel, terrain.depth)
+    reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap = _entry_angle_cap(reach, wheel.diameter)[0]
     root = (
         (over, over & reaches_base),

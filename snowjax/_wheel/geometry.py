@@ -44,8 +44,8 @@ class AbstractWheel(eqx.Module):
       (the flat part of the tread, its depth and extent) at that entry angle;
     - `contact_sinkage(entry_angle, terrain)`: the sinkage reported as
       `WheelState.sinkage` [m] (default the rim's, eq. 4.15);
-    - `deepest_reach(depth)`: how deep the undeflected circle may sink on a base at that
-      depth [m] (default: to the base);
+    - `deepest_reach(terrain)`: how deep the undeflected circle may sink on the terrain
+      [m] (default: to its base);
     - `flexing_resistance(tread)`: the resistance of the wheel's own deformation [N],
       added to the motion resistance (default None: none, a rigid rim);
     - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
@@ -78,10 +78,10 @@ class AbstractWheel(eqx.Module):
         """Sinkage of the lowest point of the contact [m] at entry angle theta0 [rad]."""
         return max_sinkage(entry_angle, self.diameter)
 
-    def deepest_reach(self, depth) -> Array:
-        """The deepest the undeflected circle's lowest point may sink [m] on a base at
-        `depth` [m] (the solver's cap on the entry angle): the base itself for a rim."""
-        return depth
+    def deepest_reach(self, terrain) -> Array:
+        """The deepest the undeflected circle's lowest point may sink [m] on `terrain`
+        (the solver's cap on the entry angle): its base (`depth`) for a rim."""
+        return terrain.depth
 
     def flexing_resistance(self, tread: Tread | None) -> Array | None:
         """The resistance of the wheel's own deformation [N] with the tread `tread`, added

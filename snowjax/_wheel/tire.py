@@ -80,9 +80,19 @@ from jaxtyping import Array, ArrayLike, Float
 
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
 from .._leaves import _as_float, parameter
+from .._terrain.base import _bisect_pressure
 from .geometry import AbstractWheel, Tread, max_sinkage
 
 __all__ = ["DeflectingTire"]
+
+# The clearance above a base [relative to its depth] within which a tyre's flat rests on
+# the base (`DeflectingTire.deepest_reach`): the solver's closest approach of a rigid
+# rim to the base (its entry angle at most theta_cap exp(-S_MIN^2), S_MIN = 1e-6).
+BASE_CLEARANCE = 1e-12
+
+# delta / s below which the deflection comes from the law's slope at s (`_flat`): the
+# linearisation's relative error there is ~ delta sigma'' / (2 sigma') ~ 1e-8.
+_LINEAR_DEFLECTION = 1e-8
 
 # delta_0 / D: below this deflection the flexing resistance's sqrt(delta) turns linear
 # (module docstring).
@@ -168,18 +178,19 @@ class DeflectingTire(AbstractWheel):
     def flat_pressure(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
         """p_f [Pa]: the pressure on the flat, the smooth minimum of the rigid rim's
         lowest-point pressure sigma(s) and p_i + p_c (module docstring)."""
-        return self._flat_pressure(max_sinkage(entry_angle, self.diameter), terrain)
+        return self._flat(entry_angle, terrain)[2]
 
-    def _flat_pressure(self, s, terrain):
-        """`flat_pressure` at the undeflected circle's lowest-point sinkage s [m]."""
-        capacity = self.inflation_pressure + self.carcass_pressure
-        rim = terrain.pressure(s, self.width)
-        # ln sigma(s) kept finite: 0 at the surface, +inf on a base (Wong's law).
+    def _smooth_min(self, rim, capacity):
+        """(p_f [Pa], g [-]): the smooth minimum in log-pressure of `rim` and `capacity`
+        [Pa] (module docstring), and its deficit g = ln(rim / p_f) = softplus(-m x) / m,
+        x = ln(capacity / rim); `rim` kept finite: 0 at the surface, +inf on a base
+        (Wong's law)."""
         tiny = jnp.finfo(jnp.result_type(rim)).tiny
         log_rim = jnp.log(jnp.clip(rim, tiny, jnp.finfo(jnp.result_type(rim)).max))
         log_capacity = jnp.log(capacity)
         m = self.sharpness
-        return jnp.exp(log_capacity - jax.nn.softplus(m * (log_capacity - log_rim)) / m)
+        x = log_capacity - log_rim
+        return jnp.exp(log_capacity - jax.nn.softplus(m * x) / m), jax.nn.softplus(-m * x) / m
 
     def deflection(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
         """delta = s - z_f [m]: how far the flat lies above the undeflected circle's
@@ -187,12 +198,73 @@ class DeflectingTire(AbstractWheel):
         return self._flat(entry_angle, terrain)[1]
 
     def _flat(self, entry_angle, terrain):
-        """(z_f [m], delta [m], p_f [Pa]) at entry angle theta0."""
+        """(z_f [m], delta [m], p_f [Pa]) at entry angle theta0.
+
+        Deep in the rigid mode, s - z_f from the law's inverse is a rounding error of s
+        (1e-17 m) that jumps from one entry angle to the next, and the flat it opens
+        carries p_f where the distribution's own stress would be (Wong–Reece's lower
+        one); so where the deflection is below `_LINEAR_DEFLECTION` s it comes from the
+        law's slope instead, delta = (sigma(s) - p_f) / sigma'(s), with sigma(s) - p_f =
+        -sigma(s) expm1(-g) from the smooth minimum's own deficit g (`_smooth_min`): exact
+        to second order, and exactly 0 for a tyre far stiffer than the ground.
+        """
         s = max_sinkage(entry_angle, self.diameter)
         limit = jnp.minimum(s, terrain.depth)
-        pressure = self._flat_pressure(s, terrain)
-        z_flat = type(terrain).sinkage_at_pressure(terrain, pressure, self.width, limit)
-        return z_flat, jnp.maximum(s - z_flat, 0.0), pressure
+        capacity = self.inflation_pressure + self.carcass_pressure
+        rim, slope = jax.jvp(lambda z: terrain.pressure(z, self.width), (s,), (jnp.ones_like(s),))
+        if terrain.pressure_rises():
+            pressure, deficit = self._smooth_min(rim, capacity)
+            z_flat = type(terrain).sinkage_at_pressure(terrain, pressure, self.width, limit)
+            at_rim = jnp.ones_like(s, dtype=bool)
+        else:
+            z_flat, pressure, deficit, at_rim = self._flat_on_pieces(s, limit, capacity, terrain)
+        regular = at_rim & jnp.isfinite(rim) & (slope > 0) & jnp.isfinite(slope)
+        safe_rim, safe_slope = jnp.where(regular, rim, 0.0), jnp.where(regular, slope, 1.0)
+        linear = -safe_rim * jnp.expm1(-deficit) / safe_slope
+        small = regular & (linear < _LINEAR_DEFLECTION * s)
+        # A tyre that rests on the base never passes it (`deepest_reach`): where s
+        # rounds past the base the flat would open by that rounding error.
+        reach = jnp.where(self._rests_on_base(terrain), limit, s)
+        delta = jnp.where(small, linear, jnp.maximum(reach - z_flat, 0.0))
+        return jnp.where(small, s - linear, z_flat), delta, pressure
+
+    def _flat_on_pieces(self, s, limit, capacity, terrain):
+        """(z_f [m], p_f [Pa], its deficit g [-], whether the flat's piece is the one
+        holding s) on a law that can drop where it breaks (`LayeredSnow`'s
+        ice layer; `AbstractTerrain.pressure_rises` False), which rises between its
+        breakpoints.
+
+        Going down from the surface, the tyre cannot press through a piece of the law
+        that reaches more than its p_i + p_c: its flat lies in the first piece whose
+        largest pressure (just above the piece's lower end, where it breaks, or at the
+        circle's lowest point s in the piece holding s) reaches p_i + p_c, at the smooth
+        minimum of that pressure and p_i + p_c; otherwise in the piece holding s, as on
+        a rising law.  So a tyre softer than the ice rides on it, and a stiff tyre
+        breaks it where the rigid rim does (p_i -> infinity is the rim).  Between
+        pieces the flat jumps: the ice holds or breaks.
+        """
+        ends = [jnp.minimum(b, limit) for b in terrain.breakpoint_sinkages()]
+        ends = jnp.sort(jnp.stack(jnp.broadcast_arrays(*ends)), axis=0)
+        # Each piece's deepest point: the float below its end (its derivative the end's).
+        fixed = jax.lax.stop_gradient(ends)
+        step = fixed - jnp.nextafter(fixed, jnp.zeros_like(fixed))
+        below = ends - step
+        inside = ends < limit  # the piece ending there lies above the lowest point
+        rim = terrain.pressure(s, self.width)
+        # Pieces: [0, e_1), [e_1, e_2), ..., [e_K, limit]; the largest pressure of each
+        # is just above its end, or the lowest point's, sigma(s), in the piece holding
+        # s.  The flat's piece: the first that blocks the tyre, else the one holding s.
+        tops = jnp.concatenate(
+            [jnp.where(inside, terrain.pressure(below, self.width), rim), rim[None]]
+        )
+        holding = jnp.concatenate([~inside, jnp.ones_like(inside[:1])])
+        lowers = jnp.concatenate([jnp.zeros_like(ends[:1]), ends])
+        uppers = jnp.concatenate([ends, limit[None]])
+        k = jnp.argmax(holding | (tops >= capacity), axis=0)[None]
+        pick = lambda x: jnp.take_along_axis(x, k, axis=0)[0]  # noqa: E731
+        pressure, deficit = self._smooth_min(pick(tops), capacity)
+        z_flat = _bisect_pressure(terrain, pressure, self.width, pick(lowers), pick(uppers))
+        return z_flat, pressure, deficit, pick(holding)
 
     def tread(self, entry_angle, terrain) -> Tread:
         """The flat at entry angle theta0 [rad]: half-angle theta_f = 2 arcsin sqrt(delta
@@ -218,10 +290,24 @@ class DeflectingTire(AbstractWheel):
         length = 2 * delta * jnp.sqrt((d - delta) / (delta + _DELTA_0 * d))
         return self.hard_surface_resistance * tread.pressure * self.width * length
 
-    def deepest_reach(self, depth) -> Array:
-        """depth + h [m]: the undeflected circle may pass the base by the section height
-        (the flat stays above the base; beyond it the rim would reach the ground)."""
-        return depth + self.section_height
+    def deepest_reach(self, terrain) -> Array:
+        """How deep the undeflected circle may sink [m]: past the base by the section
+        height h (the flat stays above the base; beyond it the rim would reach the
+        ground), unless the flat would rest on the base: a tyre whose p_i + p_c reaches
+        the law's pressure at `BASE_CLEARANCE` z_w above the base (the snow there has
+        nothing left to give) stops on the base like a rigid rim (`Status.BOTTOMED_OUT`,
+        the base carrying what the snow does not)."""
+        depth = terrain.depth
+        return jnp.where(self._rests_on_base(terrain), depth, depth + self.section_height)
+
+    def _rests_on_base(self, terrain) -> Array:
+        """Whether p_i + p_c reaches the law's pressure `BASE_CLEARANCE` z_w above a base
+        (`deepest_reach`)."""
+        depth = terrain.depth
+        finite = jnp.isfinite(depth)
+        clearance = BASE_CLEARANCE * jnp.where(finite, depth, 1.0)
+        on_base = type(terrain).pressure_at_clearance(terrain, clearance, self.width)
+        return finite & (self.inflation_pressure + self.carcass_pressure >= on_base)
 
     def contact_sinkage(self, entry_angle, terrain) -> Array:
         """z_f [m]: the sinkage of the flat (the rim's, eq. 4.15, in the rigid mode)."""
