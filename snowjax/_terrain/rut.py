@@ -12,6 +12,18 @@ surface (the elastic rebound p_u / k_u).  Where the line would reach zero above 
 original surface (k_u z_u < p_u) the floor is the original surface (z_r = 0) and the
 reloading line runs from there to (z_u, p_u): its slope is max(k_u, p_u / z_u).
 
+The unloading line is never softer than the virgin law's tangent at z_u: k_u = max(k_0 +
+A_u z_u, dsigma/dz(z_u)) (this package's choice: an unloading path is elastic, and an
+elastic modulus below the tangent modulus of the plastic loading curve would make the
+rebound outgrow the compaction).  With it the floor z_r = max(z_u - p_u / k_u, 0) never
+rises as z_u grows: where the tangent governs, dz_r/dz_u = p_u sigma'' / sigma'^2 >= 0 on
+a law that is convex there (Wong's, Bekker's with n >= 1), and on a concave law with
+sigma(0) = 0 (Bekker's n < 1) p_u / sigma' >= z_u, so the floor is the surface; where
+k_0 + A_u z_u governs, dz_r/dz_u >= 1 - sigma' / k_u >= 0.  On Wong snow the tangent
+p_w / (z_w - z_u) governs near the base, and the rebound (z_w - z_u) ln(z_w / (z_w -
+z_u)) vanishes there: a rut pressed to the base (a bottomed-out leader, z_u = z_w,
+p_u = +inf) has its floor on the base, and a later wheel rests on the base.
+
 p_u and with it the rebound are those of the earlier wheel's width b_1 (`width`).
 `Rut` is a terrain in the sinkage z' below the rut's floor, z = z' + z_r, for a later
 wheel of width b:
@@ -37,6 +49,7 @@ from __future__ import annotations
 from typing import ClassVar
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, Float
 
@@ -113,10 +126,16 @@ class Rut(AbstractTerrain):
     @property
     def reloading_depth(self) -> Array:
         """d = min(p_u / k_u, z_u) [m]: the depth of the reloading branch below the
-        floor (the elastic rebound), p_u the earlier wheel's pressure at z_u."""
+        floor (the elastic rebound), p_u the earlier wheel's pressure at z_u, k_u =
+        max(k_0 + A_u z_u, dsigma/dz(z_u)) (module docstring); 0 for a rut pressed to the
+        base (p_u infinite: nothing left to spring back)."""
         z_u = self.rut_sinkage
-        p_u = self.virgin.pressure(z_u, self.width)
-        return jnp.minimum(p_u / (self.k_0 + self.a_u * z_u), z_u)
+        p_u, tangent = jax.jvp(
+            lambda z: self.virgin.pressure(z, self.width), (z_u,), (jnp.ones_like(z_u),)
+        )
+        finite = jnp.isfinite(p_u) & jnp.isfinite(tangent)
+        k_u = jnp.maximum(self.k_0 + self.a_u * z_u, jnp.where(finite, tangent, 0.0))
+        return jnp.where(finite, jnp.minimum(jnp.where(finite, p_u, 0.0) / k_u, z_u), 0.0)
 
     @property
     def floor_depth(self) -> Array:
@@ -131,9 +150,12 @@ class Rut(AbstractTerrain):
         z = jnp.asarray(sinkage)
         d = self.reloading_depth
         p_u = self.virgin.pressure(self.rut_sinkage, width)
-        sigma, cohesion, tan_phi, modulus = self.virgin.rim_properties(
-            z + self.rut_sinkage - d, width
-        )
+        p_u = jnp.where(jnp.isfinite(p_u), p_u, 0.0)  # infinite only on the base, d = 0
+        # The virgin law at most 4 ulp above its base (a rut pressed to the base has its
+        # floor there, where a law such as Wong's is infinite).
+        eps = jnp.finfo(jnp.result_type(z, float)).eps
+        virgin_z = jnp.minimum(z + self.rut_sinkage - d, self.virgin.depth * (1 - 4 * eps))
+        sigma, cohesion, tan_phi, modulus = self.virgin.rim_properties(virgin_z, width)
         reloading = z < d
         safe_d = jnp.where(d > 0, d, 1.0)
         sigma = jnp.where(reloading, p_u * jnp.where(reloading, z, 0.0) / safe_d, sigma)
@@ -144,11 +166,25 @@ class Rut(AbstractTerrain):
         """The virgin base's depth below the rut's floor [m]."""
         return self.virgin.depth - self.floor_depth
 
+    def pressure_at_clearance(self, clearance, width):
+        """sigma' [Pa] at `clearance` [m] above the base: the virgin law's own
+        (`AbstractTerrain.pressure_at_clearance`, free of cancellation near a base where
+        it diverges) beyond the reloading branch, the reloading line within it."""
+        sinkage = self.depth - clearance
+        reloading = sinkage < self.reloading_depth
+        virgin = self.virgin.pressure_at_clearance(clearance, width)
+        line = self.pressure(jnp.where(reloading, sinkage, 0.0), width)
+        return jnp.where(reloading, line, virgin)
+
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """d, where reloading meets the virgin law, and the virgin law's own, shifted."""
         d = self.reloading_depth
         floor = self.rut_sinkage - d
         return (d, *(z - floor for z in self.virgin.breakpoint_sinkages()))
+
+    def has_base(self) -> bool:
+        """The virgin law's base, nearer by the floor's depth."""
+        return self.virgin.has_base()
 
     def pressure_rises(self) -> bool:
         """The reloading line rises, so the law rises where the virgin law does."""
@@ -156,11 +192,11 @@ class Rut(AbstractTerrain):
 
     def constraints(self, shear: str = "classic"):
         own = [r for r in AbstractTerrain.constraints(self, shear) if "." not in r[0]]
-        shallower = self.rut_sinkage < self.virgin.depth
+        shallower = self.rut_sinkage <= self.virgin.depth
         return [
             *own,
             *((f"virgin.{name}", *rest) for name, *rest in self.virgin.constraints(shear)),
-            ("rut_sinkage", self.rut_sinkage, shallower, "< the virgin base's depth (m)"),
+            ("rut_sinkage", self.rut_sinkage, shallower, "<= the virgin base's depth (m)"),
         ]
 
     def wheel_constraints(self, width):

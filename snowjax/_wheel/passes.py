@@ -83,10 +83,17 @@ def multi_pass(
         st = solve_wheel(
             wheel, ground, loads[..., k], slips[..., k], distribution=distribution, shear=shear
         )
-        total = st.sinkage + floor
+        total = _below_surface(st.sinkage, floor, terrain)
         z_max = jnp.maximum(z_max, total)
         rows.append((total, z_max, st.motion_resistance, st.drawbar_pull, st.torque, st.status))
     return PassResult(*(jnp.stack(column, axis=-1) for column in zip(*rows)))
+
+
+def _below_surface(sinkage, floor, terrain):
+    """The depth [m] below the original surface of a wheel that sank `sinkage` [m] below
+    a rut's floor at `floor` [m]: their sum, kept on the virgin `terrain`'s base (a
+    wheel resting on it: the sum can round past it, which no `Rut` accepts)."""
+    return jnp.minimum(sinkage + floor, terrain.depth)
 
 
 class Ruts(eqx.Module):
@@ -251,7 +258,7 @@ def _in_tracks(ruts, follows, contact, width, overlap, solve):
             seen = overlap[..., idx] * jnp.stack([depth[j] for j in follows[idx]], -1)
             rut = Rut(contact.terrain, seen, width[follows[idx]], ruts.k_0, ruts.a_u)
             result, sinkage = solve(eqx.tree_at(lambda c: c.terrain, contact, rut), idx)
-            total = jnp.maximum(sinkage + rut.floor_depth, seen)
+            total = jnp.maximum(_below_surface(sinkage, rut.floor_depth, contact.terrain), seen)
         for i, k in enumerate(idx):
             depth[k] = total[..., i]
         parts.append(result)
@@ -350,7 +357,7 @@ def _drive_path(
         st = solve_wheel(
             wheel, rut, load, s, distribution=distribution, shear=shear, initial_entry_angle=hint
         )
-        total = jnp.maximum(st.sinkage + rut.floor_depth, seen)
+        total = jnp.maximum(_below_surface(st.sinkage, rut.floor_depth, terrain), seen)
         grid = grid.mark(previous, position, width, total)
         hint = jax.lax.stop_gradient(jnp.where(jnp.isfinite(st.entry_angle), st.entry_angle, hint))
         out = (total, seen, st.motion_resistance, st.drawbar_pull, st.torque, st.status)
