@@ -52,6 +52,9 @@ from .._leaves import _as_float, _is_traced, parameter
 
 __all__ = ["RutMap"]
 
+# The default cap on the memory of a map's cells and of one mark's window [bytes].
+MAX_BYTES = 4 * 2**30
+
 
 class RutMap(eqx.Module):
     """The depth of the ruts on a grid (see `snowjax._terrain.rut_map` for the model).
@@ -92,22 +95,41 @@ class RutMap(eqx.Module):
         *,
         reach: float = 0.5,
         dtype=None,
+        max_bytes: float = MAX_BYTES,
     ) -> "RutMap":
         """A map of virgin snow over `extent = (x_min, x_max, y_min, y_max)` [m] in cells
         of `cell_size` h [m]; `k_0` [Pa/m], `a_u` [Pa/m^2] as in `Rut`; `reach` [m]: the
         largest extent of one wheel's mark in one step (its width plus its travel),
         which sets `window = ceil(reach / h) + 8` cells (a mark that does not fit
         raises at run time, `eqx.error_if`); `dtype`: of `depth` (default
-        JAX's float).  `ValueError` for a non-positive size or an empty extent."""
+        JAX's float); `max_bytes` [bytes]: the most the map's cells, or one mark's
+        window, may take (default `MAX_BYTES`, 4 GiB; raise it for a larger map).
+
+        **Raises:** `ValueError` for a non-positive size or an empty extent, and, before
+        anything is allocated, for a map or a window larger than `max_bytes` (naming the
+        cell size and the memory it would take)."""
         x0, x1, y0, y1 = (float(v) for v in extent)
         h = float(cell_size)
         if not (math.isfinite(h) and h > 0 and math.isfinite(reach) and reach > 0):
             raise ValueError(f"cell_size and reach must be finite and > 0 m; got {h}, {reach}")
         if not (x1 > x0 and y1 > y0 and all(map(math.isfinite, (x0, x1, y0, y1)))):
             raise ValueError(f"extent must be finite (x_min, x_max, y_min, y_max); got {extent}")
-        nx, ny = math.ceil((x1 - x0) / h), math.ceil((y1 - y0) / h)
-        window = math.ceil(reach / h) + 8
         dtype = jnp.result_type(float) if dtype is None else dtype
+        # Cell counts as Python floats first: an integer count of 10^19 cells would
+        # overflow XLA's shape arithmetic (a C++ abort, not a Python error).
+        cells = math.ceil((x1 - x0) / h) * math.ceil((y1 - y0) / h)
+        window = math.ceil(reach / h) + 8
+        itemsize = jnp.dtype(dtype).itemsize
+        for what, count in (("the map", cells), (f"one mark's window ({window} x {window})",
+                                                 window * window)):  # fmt: skip
+            if count * itemsize > max_bytes:
+                raise ValueError(
+                    f"RutMap.empty: cell_size = {h:.3g} m makes {what} {count:.3g} cells, "
+                    f"{_size(count * itemsize)} in {jnp.dtype(dtype).name} (max_bytes = "
+                    f"{_size(max_bytes)}): use larger cells, a smaller extent or reach, or "
+                    "raise max_bytes"
+                )
+        nx, ny = math.ceil((x1 - x0) / h), math.ceil((y1 - y0) / h)
         _check_modulus(k_0, a_u)
         return cls(jnp.zeros((nx, ny), dtype), k_0, a_u, (x0 + h / 2, y0 + h / 2), h, int(window))
 
@@ -222,6 +244,15 @@ class RutMap(eqx.Module):
         inside = moving & (along >= -behind) & (along <= length) & (across <= half)
         block = jnp.where(inside, jnp.maximum(block, depth.astype(block.dtype)), block)
         return jax.lax.dynamic_update_slice(grid, block, (i0, j0))
+
+
+def _size(nbytes: float) -> str:
+    """A byte count in the binary unit that reads best ("3.2 GiB")."""
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
+        if nbytes < 1024 or unit == "PiB":
+            return f"{nbytes:.3g} {unit}"
+        nbytes /= 1024
+    return f"{nbytes:.3g} PiB"
 
 
 def _check_modulus(k_0, a_u) -> None:
