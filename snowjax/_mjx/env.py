@@ -6,6 +6,7 @@ environment in the shape of MuJoCo Playground's / Brax's (`reset(rng) -> State`,
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import equinox as eqx
@@ -61,6 +62,11 @@ class State(eqx.Module):
     metrics: dict[str, Array]
     info: dict[str, Any]
 
+    def replace(self, **changes: Any) -> "State":
+        """A copy with the given fields replaced (`State.replace(done=...)`, as Brax's
+        and MuJoCo Playground's wrappers call it on their states)."""
+        return dataclasses.replace(self, **changes)
+
 
 class SnowRoverEnv:
     """Drive the shipped rover (`load_rover`) to a goal on snow whose parameters change
@@ -73,9 +79,11 @@ class SnowRoverEnv:
     `goal_bonus` on arrival within `goal_radius` [m]; the episode ends on arrival
     (`done`) or after `episode_length` steps (`done` and `info["truncation"]`).
 
-    **Action** (2,), in [-1, 1] (clipped): steering (times `max_steer` [rad], Ackermann
-    through `rover_controls`) and throttle (times `max_torque` [N m] on every wheel).
-    Each action is held for `frame_skip` MJX steps of 5 ms.
+    **Action** (2,), in [-1, 1] (clipped; NaN counts as 0): steering (times
+    `max_steer` [rad], Ackermann through `rover_controls`) and throttle (times
+    `max_torque` [N m] on every wheel).  Each action is held for `frame_skip` MJX steps
+    of 5 ms.  A step whose state turns non-finite ends the episode (`done` = 1, zero
+    reward, zero observation), as MuJoCo Playground's environments do.
 
     **Observation** (13,): the goal in the chassis frame (x, y [m] / 10), the distance
     [m] / 10, the chassis's velocity (forward, left [m/s]) and yaw rate [rad/s], its
@@ -85,7 +93,8 @@ class SnowRoverEnv:
     **Use:** `env = SnowRoverEnv()`; `state = jax.vmap(env.reset)(keys)`;
     `state = jax.vmap(env.step)(state, actions)`.  There is no automatic reset: a
     finished instance stays put (zero reward) until you `reset` it (or wrap the
-    environment in Brax's `AutoResetWrapper`, which needs only `reset`/`step`/`State`).
+    environment in Brax's `AutoResetWrapper`, which needs only `reset`/`step`/`State`
+    and `State.replace`).
     Everything is jit-, vmap- and jvp-compatible (`jax.jit(env.step)` works: like
     Playground's environments this is a plain Python class holding the MJX model, not a
     pytree).
@@ -187,7 +196,9 @@ class SnowRoverEnv:
         action (held).  A finished instance (`done` = 1) is left unchanged."""
         info = state.info
         dtype = state.reward.dtype
-        action = jnp.clip(jnp.asarray(action, dtype), -1.0, 1.0)
+        # A NaN action steers straight and applies no torque (inf is clipped to +-1):
+        # NaN passes `jnp.clip` and would poison the rover's state for good.
+        action = jnp.clip(jnp.nan_to_num(jnp.asarray(action, dtype), nan=0.0), -1.0, 1.0)
         steer = self.max_steer * action[0]
         ctrl = rover_controls(steer, jnp.full((4,), self.max_torque) * action[1])
 
@@ -215,12 +226,21 @@ class SnowRoverEnv:
             truncation=jnp.where(timeout & ~arrived, 1.0, 0.0).astype(dtype),
         )  # fmt: skip
         speed = jnp.linalg.norm(data.qvel[:2])
+        obs = self._observe(data, new_info)
+        # A state that turned non-finite (e.g. the physics diverged) ends the episode, as
+        # MuJoCo Playground's environments do, with a finite observation and no reward.
+        broken = ~(
+            jnp.all(jnp.isfinite(data.qpos))
+            & jnp.all(jnp.isfinite(data.qvel))
+            & jnp.all(jnp.isfinite(obs))
+            & jnp.isfinite(reward)
+        )
         new = State(
             data,
-            self._observe(data, new_info),
-            reward.astype(dtype),
-            (arrived | timeout).astype(dtype),
-            {"distance": distance, "speed": speed},
+            jnp.where(broken, 0.0, obs),
+            jnp.where(broken, 0.0, reward).astype(dtype),
+            (arrived | timeout | broken).astype(dtype),
+            {"distance": jnp.where(broken, state.metrics["distance"], distance), "speed": speed},
             new_info,
         )
         # A finished instance keeps its state (and earns nothing).
