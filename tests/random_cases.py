@@ -98,3 +98,38 @@ def any_terrain_inputs(kind, unit, corner, dtype):
     )
     wheel = sj.RigidWheel(cast(d), cast(b))
     return wheel, terrain, distribution, lateral, cast(load), cast(slip), cast(beta)
+
+
+STIFF = 1e9  # [Pa]: a tyre 10^4 times stiffer than any terrain here (within float32's window)
+
+
+def tire_and_rut_inputs(kind, unit, extra, corner, dtype):
+    """(rim, tyres, terrain, WongReece, load, slip, ruts) of a batch: `any_terrain_inputs`
+    (`unit`, `corner`) and `extra`, 3 rows of numbers in [0, 1].
+
+    The first half of the tyres soft (p_i 10 kPa-1 MPa, p_c 0 or 1-20 kPa, flexing f_h 0
+    or 0.001-0.03, section height 0.2 D), the second half `STIFF`; the ruts (`Rut` of the
+    terrain, k_0 1 MPa/m, A_u 5 MPa/m^2, left by the same wheel) a third each of zero
+    depth, of a share of the base's depth (0.3 m where there is none) and at the base
+    itself (a leader that bottomed out).
+    """
+    wheel, terrain, distribution, _, load, slip, _ = any_terrain_inputs(kind, unit, corner, dtype)
+    u = np.asarray(extra, dtype=np.float64)
+    n = u.shape[1]
+    stiff = np.arange(n) >= n // 2
+    cast = lambda x: jnp.asarray(x, dtype)  # noqa: E731
+    tires = sj.DeflectingTire(
+        wheel.diameter,
+        wheel.width,
+        0.2 * wheel.diameter,
+        cast(np.where(stiff, STIFF, _log_between(u[0], 1e4, 1e6))),
+        cast(np.where(stiff, 0.0, _zero_or_between(u[1], 1e3, 2e4))),
+        30.0,
+        cast(np.where(stiff, 0.0, _zero_or_between(u[1], 1e-3, 0.03))),
+    )
+    depth = np.asarray(terrain.depth, dtype=np.float64)
+    base = np.where(np.isfinite(depth), depth, 0.3)
+    third = np.arange(n) % 3
+    share = np.select([third == 0, third == 1], [0.0, _between(u[2], 0.01, 1.0)], 1.0)
+    ruts = sj.Rut(terrain, cast(share * base), wheel.width, cast(1e6), cast(5e6))
+    return wheel, tires, terrain, distribution, load, slip, ruts

@@ -15,21 +15,28 @@ simulation step (hypothesis).
    T - M_w`), is never positive, on every terrain law and both stress distributions; and
    with zero drive torque a coasting vehicle's kinetic energy never increases
    (`simulate_longitudinal`, `simulate_planar`; `snowjax.mjx` in `tests/test_mjx.py`).
+3. The rover's environment (`snowjax.mjx.SnowRoverEnv`) under random actions, NaN and
+   +-inf among them, float64 and float32: observations and rewards finite, no instance
+   poisoned by a NaN action, a broken state ends its episode; its `State.replace`.
 """
+
+import os
+import subprocess
+import sys
 
 import diffrax
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 import snowjax as sj
 from snowjax import Status
 from snowjax._sim.planar import _body_to_wheel, _planar_wheel_forces
 
-from .random_cases import UNIT_ROWS, any_terrain_inputs
+from .random_cases import UNIT_ROWS, any_terrain_inputs, tire_and_rut_inputs
 from .xla import optimised
 
 SHEAR_MODELS = ("classic", "simplified", "none")
@@ -246,6 +253,64 @@ def test_bottomed_out_any_terrain_path_is_finite(terrain, slip, dtype):
     assert int(state.status) == Status.BOTTOMED_OUT
     for name in ALL_FIELDS:
         assert np.isfinite(float(getattr(state, name))), name
+
+
+# ---------------------------------------------------------------------------------------
+# 1c. Deflecting tyres and ruts on every terrain law
+# ---------------------------------------------------------------------------------------
+
+# One case: an any-terrain case (1b) and three more numbers in [0, 1]: the soft tyre's
+# inflation pressure, its flexing coefficient and the rut's depth as a share of the base's.
+TIRE_CASE = st.tuples(ANY_CASE, st.tuples(UNIT, UNIT, UNIT))
+TIRE_BATCHES = st.lists(TIRE_CASE, min_size=BATCH, max_size=BATCH)
+# A failing batch is reported as found: shrinking a batch of solves takes minutes.
+NO_SHRINK = (Phase.explicit, Phase.reuse, Phase.generate)
+
+
+def _tires_and_ruts(kind, cases, dtype):
+    unit = np.array([c[0][0] for c in cases], dtype=np.float64).T
+    extra = np.array([c[1] for c in cases], dtype=np.float64).T
+    return tire_and_rut_inputs(kind, unit, extra, [c[0][1] for c in cases], dtype)
+
+
+@jax.jit
+def _tire_and_rut_solve(wheel, tires, terrain, distribution, load, slip, ruts):
+    """States of the tyres (front region, Wong–Reece), the rim (front region, Wong–Reece)
+    and the rim on the ruts (front region)."""
+    out = {}
+    for name, dist in (("front", None), ("wong_reece", distribution)):
+        out[f"tire {name}"] = sj.solve_wheel(tires, terrain, load, slip, distribution=dist)
+        out[f"rim {name}"] = sj.solve_wheel(wheel, terrain, load, slip, distribution=dist)
+    out["rut"] = sj.solve_wheel(wheel, ruts, load, slip)
+    return out
+
+
+@pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
+@pytest.mark.parametrize("kind", ["wong", "bekker", "reece", "layered"])
+@settings(max_examples=2, deadline=None, derandomize=True, phases=NO_SHRINK)
+@given(cases=TIRE_BATCHES)
+def test_tyres_and_ruts_never_nan_and_a_stiff_tyre_is_the_rim(cases, kind, dtype):
+    """Soft tyres (with flexing) and stiff ones, ruts of zero depth, mid-depth and at the
+    base, driving and braking, the bottomed-out corner: every element converged or
+    flagged, no inf/NaN (`random_cases.tire_and_rut_inputs`); and a 1e9 Pa tyre is the
+    rim on every law and both distributions, its status and every field within 1e-6
+    (float32: 1e-3)."""
+    inputs = _tires_and_ruts(kind, cases, dtype)
+    states = _tire_and_rut_solve(*inputs)
+    for label, state in states.items():
+        _check_state(state, dtype, (kind, label))
+    stiff = slice(BATCH // 2, None)
+    rtol = 1e-6 if dtype == jnp.float64 else 1e-3
+    for dist in ("front", "wong_reece"):
+        tire, rim = states[f"tire {dist}"], states[f"rim {dist}"]
+        np.testing.assert_array_equal(tire.status[stiff], rim.status[stiff])
+        for name in FIELDS:
+            expected = np.asarray(getattr(rim, name)[stiff])
+            got = np.asarray(getattr(tire, name)[stiff])
+            scale = np.abs(np.asarray(rim.motion_resistance[stiff]))
+            atol = rtol * scale if name in ("thrust", "drawbar_pull") else 0.0
+            error = np.abs(got - expected) - rtol * np.abs(expected) - atol
+            assert np.all(error <= 0), (kind, dist, name, got[error > 0], expected[error > 0])
 
 
 # ---------------------------------------------------------------------------------------
@@ -481,3 +546,113 @@ def test_coasting_planar_vehicle_never_gains_energy():
         + 0.5 * 1.5 * np.sum(np.asarray(traj.wheel_speed) ** 2, -1)
     )
     assert np.all(np.diff(energy, axis=1) <= 1e-9 * energy[:, :-1] + 1e-9)
+
+
+# ---------------------------------------------------------------------------------------
+# 3. The rover's environment under any action, NaN and inf included
+# ---------------------------------------------------------------------------------------
+
+ENV_BATCH, ENV_STEPS = 8, 4
+# An action component: any finite value (clipped to [-1, 1]), NaN or +-inf.
+ACTION = st.one_of(_uniform(-3.0, 3.0), st.sampled_from([np.nan, np.inf, -np.inf]))
+ACTIONS = st.lists(st.tuples(ACTION, ACTION), min_size=ENV_BATCH * ENV_STEPS,
+                   max_size=ENV_BATCH * ENV_STEPS)  # fmt: skip
+
+# The rollout, run in this process (float64) and in a float32 one (`_ENV_SCRIPT`):
+# reset a batch, break one instance's state (NaN velocities), then step with the actions.
+_ENV_CODE = """
+import jax, jax.numpy as jnp
+import snowjax.mjx as smjx
+
+env = smjx.SnowRoverEnv(episode_length=20, frame_skip=2)
+
+@jax.jit
+def rollout(key, actions):
+    state = jax.vmap(env.reset)(jax.random.split(key, actions.shape[1]))
+    qvel = state.data.qvel.at[-1].set(jnp.nan)  # the last instance's state is broken
+    state = state.replace(data=state.data.replace(qvel=qvel))
+    def body(state, action):
+        state = jax.vmap(env.step)(state, action)
+        return state, (state.obs, state.reward, state.done, state.data.qpos)
+    return jax.lax.scan(body, state, actions)[1]
+"""
+
+
+def _mjx_or_skip():
+    """`snowjax.mjx`, or a skip where the `mjx` extra is absent (a failure in CI)."""
+    try:
+        import snowjax.mjx  # noqa: F401
+    except ImportError:
+        if os.environ.get("CI", "").lower() == "true":
+            raise
+        pytest.skip("the snowjax[mjx] extra (mujoco, mujoco-mjx) is not installed")
+
+
+@pytest.fixture(scope="module")
+def rover_rollout():
+    _mjx_or_skip()
+    namespace: dict = {}
+    exec(_ENV_CODE, namespace)  # noqa: S102
+    return namespace["rollout"]
+
+
+def _check_rollout(obs, reward, done, qpos, dtype):
+    """Every observation and reward finite; a non-finite state only in an instance that
+    is done (the broken last one from its first step, no other)."""
+    assert obs.dtype == dtype and reward.dtype == dtype
+    assert np.all(np.isfinite(obs)) and np.all(np.isfinite(reward))
+    assert np.all(done[:, -1] == 1.0) and np.all(reward[:, -1] == 0.0)
+    broken = ~np.all(np.isfinite(qpos), axis=-1)
+    assert not broken[:, :-1].any()  # NaN actions never poison an instance
+    assert np.all(done[~np.all(np.isfinite(qpos), axis=-1)] == 1.0)
+
+
+@settings(max_examples=3, deadline=None, derandomize=True, phases=NO_SHRINK)
+@given(actions=ACTIONS)
+def test_the_rover_environment_never_turns_nan_under_any_action(rover_rollout, actions):
+    """Random actions, a quarter of their components NaN or +-inf on average, over a
+    batch whose last instance starts from a broken state (float64): observations and
+    rewards stay finite; NaN actions never poison an instance (the audit: NaN passed
+    `jnp.clip` and the instance stayed NaN under later valid actions); the broken
+    instance ends its episode (`done` = 1) with zero reward, as Playground's do."""
+    a = np.asarray(actions, np.float64).reshape(ENV_STEPS, ENV_BATCH, 2)
+    obs, reward, done, qpos = (np.asarray(x) for x in rover_rollout(jax.random.key(0), a))
+    _check_rollout(obs, reward, done, qpos, np.float64)
+
+
+def test_the_rover_environment_never_turns_nan_in_float32(tmp_path):
+    """The same rollout in a float32 process, with fixed random actions (a third of
+    their components NaN or +-inf)."""
+    _mjx_or_skip()
+    rng = np.random.default_rng(7)
+    a = rng.uniform(-3, 3, (ENV_STEPS, ENV_BATCH, 2))
+    a[rng.uniform(size=a.shape) < 0.33] = rng.choice([np.nan, np.inf, -np.inf])
+    np.save(tmp_path / "actions.npy", a.astype(np.float32))
+    script = _ENV_CODE + (
+        "import numpy as np\n"
+        f"a = jnp.asarray(np.load({str(tmp_path / 'actions.npy')!r}))\n"
+        "out = rollout(jax.random.key(0), a)\n"
+        f"np.savez({str(tmp_path / 'out.npz')!r}, *[np.asarray(x) for x in out])\n"
+    )
+    env = dict(os.environ, JAX_ENABLE_X64="0", JAX_PLATFORMS="cpu")
+    done = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr[-3000:]
+    out = np.load(tmp_path / "out.npz")
+    _check_rollout(*(out[f"arr_{k}"] for k in range(4)), np.float32)
+
+
+def test_the_environment_state_takes_replace_as_the_wrappers_call_it(rover_rollout):
+    """`State.replace(done=...)` (Brax's `AutoResetWrapper` / `EpisodeWrapper`, MuJoCo
+    Playground's `BraxAutoResetWrapper`): eagerly, under `jit` and under `vmap` (the
+    audit: an equinox Module without `replace`, `AttributeError`)."""
+    import snowjax.mjx as smjx
+
+    env = smjx.SnowRoverEnv(episode_length=20, frame_skip=2)
+    state = jax.vmap(env.reset)(jax.random.split(jax.random.key(1), 2))
+    done = state.replace(done=jnp.ones_like(state.done))
+    assert isinstance(done, smjx.State) and np.all(np.asarray(done.done) == 1.0)
+    np.testing.assert_array_equal(done.obs, state.obs)
+    reset = jax.jit(jax.vmap(lambda s: s.replace(done=jnp.zeros_like(s.done), reward=s.reward)))
+    again = reset(done)
+    assert np.all(np.asarray(again.done) == 0.0)
+    assert jax.tree.structure(again) == jax.tree.structure(state)

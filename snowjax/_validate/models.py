@@ -1,14 +1,25 @@
 """The models `snowjax validate` compares with Shoop (2001) Table 11 (see
-`snowjax._validate.validate` for the data, the method and the defaults)."""
+`snowjax._validate.validate` for the data, the method and the defaults).
+
+Each model is a **prediction** (every parameter from the literature or from other data,
+nothing taken from the rows it is scored on; the rows' snow depth and density are the
+conditions, given as for any prediction) or a **calibration** (parameters chosen on the
+rows, each within bounds taken from a cited source, scored by cross-validation that refits
+them per fold).
+"""
 
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable
 
 import numpy as np
 
-__all__ = ["ValidationModel", "validation_models", "wheel_validation_model"]
+from .._constants import PLATE_RULE_P_W, THESIS_P_W
+from .._empirical.common import ICE_DENSITY
+
+__all__ = ["Bound", "ValidationModel", "validation_models", "wheel_validation_model"]
 
 DEFAULT_WHEEL_LOAD = 6800.0  # [N], CRREL 95-7 Table 2 (interpretation, see module docs)
 DEFAULT_TYRE_WIDTH = 0.235  # [m], assumption
@@ -16,9 +27,44 @@ CIV_FINAL_DENSITY = 500.0  # [kg/m^3], CRREL 95-7: the value used for the CIV's 
 CIV_INFLATION = 103e3  # [Pa], CRREL 95-7 Table 2: the CIV's tyres at the lower pressure
 CIV_SECTION_RATIO = 0.75  # section height / width [-], an assumption (a 75-series tyre)
 
-# ----------------------------------------------------------------------------------------
-# models
-# ----------------------------------------------------------------------------------------
+
+@dataclasses.dataclass(frozen=True)
+class Bound:
+    """The range a calibrated parameter may take, and where it comes from.
+
+    - `name`: the parameter, with its unit ("rho_f [kg/m^3]").
+    - `lower`, `upper`: the range (SI), the ends of the calibration's grid.
+    - `source`: the cited source of the range.
+    """
+
+    name: str
+    lower: float
+    upper: float
+    source: str
+
+
+# rho_f: CRREL 95-7 (Richmond, Shoop & Blaisdell 1995, beside eq. 1) gives the final
+# density of snow under a tyre or track by its peak contact pressure: 500 kg/m^3 up to
+# 210 kPa, 550, 600 and 650 kg/m^3 above 210, 350 and 700 kPa.
+FINAL_DENSITY = Bound(
+    "rho_f [kg/m^3]",
+    500.0,
+    650.0,
+    "CRREL 95-7 (final density 500-650 kg/m^3 by peak contact pressure)",
+)
+# p_w: the thesis's two values for fresh snow, Wong's plate rule on its plate test
+# (Table 2.1: 12.92 kPa) and the value that makes its Table 4.1 entry angle the 5 kN
+# no-shear equilibrium of its tyre (85.55 kPa; `WongSnow.thesis_fresh_snow`).
+WONG_P_W = Bound(
+    "p_w [Pa]",
+    PLATE_RULE_P_W,
+    THESIS_P_W,
+    "Sankapalli (2004): Table 2.1 (plate rule) to Table 4.1 (12.9-85.6 kPa)",
+)
+P_W_GRID = np.geomspace(WONG_P_W.lower, WONG_P_W.upper, 21)  # steps of 10 %
+RHO_F_GRID = np.linspace(FINAL_DENSITY.lower, FINAL_DENSITY.upper, 7)  # steps of 25 kg/m^3
+# (p_w [Pa], rho_f [kg/m^3]) of the two-parameter snow.
+PIT_GRID = np.stack([g.ravel() for g in np.meshgrid(P_W_GRID, RHO_F_GRID, indexing="ij")], 1)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -27,10 +73,17 @@ class ValidationModel:
 
     `evaluate(rows, grid)` returns `(sinkage, coefficient)`, each of shape
     `(n_rows, len(grid))` (or `None` for a quantity the model does not predict); `grid`
-    is the grid of the calibrated parameter, 1-D or (G, k) for k parameters together
-    (`None`: nothing to calibrate, shape `(n_rows, 1)`).  `fit_target` is the quantity
-    the parameter is fitted to (`"sinkage"`, `"coefficient"`, or `"both"`: their squared
-    errors in units of `BOTH_SCALES`).
+    is the grid of the calibrated parameters, 1-D or (G, k) for k parameters together,
+    whose ends are the `bounds` (`None`: a prediction, shape `(n_rows, 1)`).
+    `fit_target` is the quantity a calibration is fitted to (`"sinkage"`,
+    `"coefficient"`, or `"both"`: their squared errors in units of `BOTH_SCALES`).
+
+    - `fixed`: the parameters set without the rows, and their sources.
+    - `bounds`: a calibration's `Bound` per grid column.
+    - `row_inputs`: measured quantities of the scored rows the model takes as input
+      beyond their snow's depth and density (e.g. the measured sinkage).
+    - `compare_to`: the key of the rigid-wheel model on the same snow and grid, for a
+      tyre's own contribution (tyre minus rim at the parameters chosen).
     """
 
     key: str
@@ -41,19 +94,36 @@ class ValidationModel:
     fit_target: str | None = None
     parameter: str = ""
     note: str = ""
+    fixed: str = ""
+    bounds: tuple[Bound, ...] = ()
+    row_inputs: str = ""
+    compare_to: str | None = None
+
+    @property
+    def kind(self) -> str:
+        """`"calibration"` (parameters fitted on the rows), `"prediction"`, or
+        `"baseline"` (the mean of the training rows)."""
+        if self.key == "baseline":
+            return "baseline"
+        return "prediction" if self.grid is None else "calibration"
+
+
+# ----------------------------------------------------------------------------------------
+# models
+# ----------------------------------------------------------------------------------------
+
+
+def _strength(p_w, diameter):
+    """Table 4.1's ratios: c = 0.2165 p_w, tan phi = 0.0787, K = D / 73.6."""
+    return {"cohesion": 0.2165 * p_w, "tan_phi": 0.0787, "shear_modulus": diameter / 73.6}
 
 
 def _wong_terrain(rows, grid, diameter):
+    """Wong snow on a base at the snow's depth (z_w = h), p_w on `grid`."""
     from .._terrain.wong import WongSnow
 
     p_w = np.asarray(grid)[None, :]
-    return WongSnow(
-        p_w=p_w,
-        z_w=rows["snow_depth_m"][:, None],
-        cohesion=0.2165 * p_w,
-        tan_phi=0.0787,
-        shear_modulus=diameter / 73.6,
-    )
+    return WongSnow(p_w=p_w, z_w=rows["snow_depth_m"][:, None], **_strength(p_w, diameter))
 
 
 def _wong_pit_terrain(rows, grid, diameter):
@@ -67,24 +137,17 @@ def _wong_pit_terrain(rows, grid, diameter):
         rows["snow_depth_m"][:, None],
         rows["density_kg_m3"][:, None],
         p_w=p_w,
-        cohesion=0.2165 * p_w,
-        tan_phi=0.0787,
-        shear_modulus=diameter / 73.6,
         final_density=rho_f,
+        **_strength(p_w, diameter),
     )
 
 
-# (p_w [Pa], rho_f [kg/m^3]) of the two-parameter snow: 16 x 16 points (rho_f in steps
-# of 67 kg/m^3).
-PIT_GRID = np.stack(
-    [
-        g.ravel()
-        for g in np.meshgrid(
-            np.geomspace(5e3, 300e3, 16), np.linspace(400.0, 1400.0, 16), indexing="ij"
-        )
-    ],
-    axis=1,
-)
+# The prediction's snow: the thesis's plate rule p_w and CRREL's rho_f for the CIV.
+PREDICTED_PIT_SNOW = np.array([[PLATE_RULE_P_W, CIV_FINAL_DENSITY]])
+
+
+def _predicted_pit_terrain(rows, grid, diameter):
+    return _wong_pit_terrain(rows, PREDICTED_PIT_SNOW, diameter)
 
 
 def _civ_tire(diameter, width):
@@ -98,26 +161,17 @@ def _civ_tire(diameter, width):
     return DeflectingTire(diameter, width, CIV_SECTION_RATIO * width, CIV_INFLATION, 0.0)
 
 
-def _bekker_terrain(rows, grid, diameter):
+def _bekker_lab_snow(rows, grid, diameter):
     from .._terrain.bekker import BekkerSoil
 
-    lab = BekkerSoil.thesis_lab_snow()
-    s = np.asarray(grid)[None, :]
-    return BekkerSoil(
-        n=lab.n,
-        k_c=lab.k_c * s,
-        k_phi=lab.k_phi * s,
-        cohesion=lab.cohesion,
-        tan_phi=lab.tan_phi,
-        shear_modulus=lab.shear_modulus,
-    )
+    return BekkerSoil.thesis_lab_snow()
 
 
 def wheel_validation_model(
     key: str,
     label: str,
     make_terrain: Callable,
-    grid: np.ndarray,
+    grid: np.ndarray | None,
     parameter: str,
     *,
     wheel_load: float = DEFAULT_WHEEL_LOAD,
@@ -125,17 +179,21 @@ def wheel_validation_model(
     make_wheel: Callable | None = None,
     fit_target: str = "sinkage",
     note: str = "",
+    fixed: str = "",
+    bounds: tuple[Bound, ...] = (),
+    compare_to: str | None = None,
 ) -> ValidationModel:
     """The chapter-4 wheel (`snowjax.solve_wheel`, towed: slip 0, classic shear) on any
     terrain: `make_terrain(rows, grid, diameter)` must return a `snowjax` terrain whose
     leaves broadcast to `(n_rows, len(grid))` (or `(1, len(grid))`); `make_wheel(diameter,
-    width)` the wheel (default `RigidWheel`; e.g. a `DeflectingTire`).  The parameter on
-    `grid` (1-D, or (G, k) for k parameters together) is fitted by leave-one-out to the
-    measured sinkage (`fit_target="sinkage"`), or to sinkage and R/W together ("both":
-    squared errors in units of `BOTH_SCALES`).  Elements that neither converge nor
-    bottom out are NaN (and never chosen)."""
+    width)` the wheel (default `RigidWheel`; e.g. a `DeflectingTire`).  With a `grid`
+    (1-D, or (G, k) for k parameters together, its ends the `bounds`) the model is a
+    calibration, fitted per fold to the measured sinkage (`fit_target="sinkage"`), or to
+    sinkage and R/W together ("both": squared errors in units of `BOTH_SCALES`); without
+    one (`None`) a prediction (`make_terrain` gets a grid of one point, unused).
+    Elements that neither converge nor bottom out are NaN (and never chosen)."""
 
-    def evaluate(rows, grid):
+    def evaluate(rows, points):
         import jax.numpy as jnp
 
         from .._wheel.equilibrium import solve_wheel
@@ -143,11 +201,11 @@ def wheel_validation_model(
 
         diameter = 2 * float(rows["radius_m"][0])
         wheel = (make_wheel or RigidWheel)(diameter, tyre_width)
-        terrain = make_terrain(rows, grid, diameter)
+        terrain = make_terrain(rows, points, diameter)
         st = solve_wheel(wheel, terrain, jnp.asarray(wheel_load), jnp.asarray(0.0))
         status = np.asarray(st.status)
         usable = (status == 0) | (status == 1)
-        shape = (len(rows["row"]), len(grid))
+        shape = (len(rows["row"]), len(points))
         z = np.broadcast_to(np.where(usable, np.asarray(st.sinkage), np.nan), shape)
         mu = np.broadcast_to(
             np.where(usable, np.asarray(st.motion_resistance) / wheel_load, np.nan), shape
@@ -157,12 +215,15 @@ def wheel_validation_model(
     return ValidationModel(
         key=key,
         label=label,
-        equations="rigid wheel, sinkage-vs-load equilibrium (4.14), resistance (4.16)",
+        equations="chapter-4 wheel, sinkage-vs-load equilibrium (4.14), resistance (4.16)",
         evaluate=evaluate,
-        grid=np.asarray(grid),
-        fit_target=fit_target,
+        grid=None if grid is None else np.asarray(grid),
+        fit_target=None if grid is None else fit_target,
         parameter=parameter,
         note=note,
+        fixed=fixed,
+        bounds=bounds,
+        compare_to=compare_to,
     )
 
 
@@ -181,6 +242,10 @@ def validation_models(
 
     lab = BekkerSoil.thesis_lab_snow()
     w_n, b = wheel_load, tyre_width
+    # Van Es's sigma_i from CRREL's rho_f = 500 kg/m^3 reached under the CIV's 103 kPa
+    # with lambda = 1: sigma_i = p exp(lambda (rho_i / rho_f - 1)^2) (the compaction law
+    # of `van_es_compaction_resistance`).
+    sigma_i = CIV_INFLATION * math.exp((ICE_DENSITY / CIV_FINAL_DENSITY - 1) ** 2)
 
     def wheel_model(*args, **kwargs):  # the chapter-4 wheel at this load and width
         return wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
@@ -189,7 +254,7 @@ def validation_models(
         return len(rows["row"])
 
     def baseline(rows, grid):
-        # never called: `validate` predicts each row by the mean of the other rows.
+        # never called: `validate` predicts each held-out row by the mean of the others.
         return None, None
 
     def crrel_fixed(rows, grid):
@@ -221,25 +286,30 @@ def validation_models(
 
     def bekker_closed(rows, grid):
         d = 2 * float(rows["radius_m"][0])
-        s = np.asarray(grid)
-        z = np.asarray(bekker_wheel_sinkage(w_n, d, b, lab.k_c * s, lab.k_phi * s, lab.n))
-        r = np.asarray(bekker_rolling_resistance(w_n, d, b, lab.k_c * s, lab.k_phi * s, lab.n))
-        shape = (n_rows(rows), len(s))
+        z = np.asarray(bekker_wheel_sinkage(w_n, d, b, lab.k_c, lab.k_phi, lab.n))
+        r = np.asarray(bekker_rolling_resistance(w_n, d, b, lab.k_c, lab.k_phi, lab.n))
+        shape = (n_rows(rows), 1)
         return np.broadcast_to(z, shape), np.broadcast_to(r / w_n, shape)
 
     def van_es(rows, grid):
         h = rows["snow_depth_m"][:, None]
         rho0 = rows["density_kg_m3"][:, None]
-        d_c = van_es_compaction_resistance(b, h, rho0, CIV_FINAL_DENSITY, grid[None, :])
+        d_c = van_es_compaction_resistance(b, h, rho0, CIV_FINAL_DENSITY, sigma_i)
         return None, np.asarray(d_c) / w_n
 
+    table41 = "c = 0.2165 p_w, tan phi = 0.0787, K = D/73.6 (Table 4.1)"
+    civ = "p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section height 0.75 b (assumed)"
+    plate_snow = (
+        f"p_w = {PLATE_RULE_P_W / 1e3:.2f} kPa (Wong's plate rule on the thesis's Table 2.1), "
+        f"z_w = h (1 - rho0 / 500) (CRREL 95-7 eq. 1, rho_f for the CIV), {table41}"
+    )
     return [
         ValidationModel(
             "baseline",
             "baseline: mean of the training rows",
             "-",
             baseline,
-            note="predicts every held-out row by the mean of the others",
+            note="predicts every held-out row by the mean of the rows it was not held out with",
         ),
         ValidationModel(
             "crrel",
@@ -247,41 +317,90 @@ def validation_models(
             "CRREL 95-7 eq. 1 (z = h(1 - rho0/rho_f)) + eq. 4 (= thesis 2.23) on the "
             "arc a = r arccos(1 - z/r)",
             crrel_fixed,
-            note="no calibration: rho_f = 500 kg/m^3 is CRREL 95-7's value for the CIV",
+            fixed="rho_f = 500 kg/m^3 (CRREL 95-7, its value for the CIV's tyres)",
         ),
         ValidationModel(
             "crrel_fit",
-            "CRREL shallow snow, rho_f fitted",
+            "CRREL shallow snow, rho_f calibrated",
             "as above",
             crrel_fitted,
-            grid=np.linspace(300.0, 917.0, 618),
+            grid=np.linspace(FINAL_DENSITY.lower, FINAL_DENSITY.upper, 151),
             fit_target="sinkage",
             parameter="rho_f [kg/m^3]",
+            bounds=(FINAL_DENSITY,),
         ),
         ValidationModel(
             "richmond_measured_rut",
             "Richmond (2.23) on the measured rut",
             "R = 21.313 (rho0 w a)^1.1918, a = r arccos(1 - z_measured/r)",
             richmond_measured,
-            note="uses the measured sinkage as input: tests the resistance law alone",
+            fixed="Richmond's coefficients (CRREL 95-7 eq. 4)",
+            row_inputs="the measured sinkage of each row (a quantity of the table itself)",
+        ),
+        ValidationModel(
+            "van_es",
+            "Van Es (2.26), D_c only",
+            "D_c with rho_f = 500 kg/m^3, lambda = 1",
+            van_es,
+            fixed=f"sigma_i = {sigma_i / 1e3:.0f} kPa: the compaction law p = sigma_i "
+            "exp(-lambda (rho_i/rho - 1)^2) reaching CRREL's rho_f = 500 kg/m^3 under the "
+            "CIV's 103 kPa, lambda = 1 (the thesis's default); D_r = D_d = 0",
+        ),
+        wheel_model(
+            "wheel_wong_pit_predicted",
+            "chapter-4 wheel, Wong snow from depth and density",
+            _predicted_pit_terrain,
+            None,
+            "",
+            fixed=plate_snow,
+        ),
+        wheel_model(
+            "tire_wong_pit_predicted",
+            "deflecting tyre (103 kPa), Wong snow from depth and density",
+            _predicted_pit_terrain,
+            None,
+            "",
+            make_wheel=_civ_tire,
+            fixed=f"{civ}; the snow of the row above",
+            compare_to="wheel_wong_pit_predicted",
+        ),
+        wheel_model(
+            "wheel_bekker",
+            "chapter-4 wheel, Bekker snow (the thesis's lab snow)",
+            _bekker_lab_snow,
+            None,
+            "",
+            fixed="Shoop's 200 kg/m^3 laboratory snow as the thesis fits it (section 2.1.1): "
+            "n 1.07, k_c 3.43 kN/m^(n+1), k_phi 218.8 kN/m^(n+2); unlimited depth",
+            note="at 6.8 kN the wheel sinks past the 85-degree limit of the rim's geometry on "
+            "this snow (the closed form below: 0.23 m, deeper than every row's snow)",
+        ),
+        ValidationModel(
+            "bekker",
+            "Bekker closed form (2.24/2.25), the thesis's lab snow",
+            "z0 and R_c of (2.25)",
+            bekker_closed,
+            fixed="the lab snow of the row above",
         ),
         wheel_model(
             "wheel_wong",
-            "chapter-4 wheel, Wong snow (z_w = h)",
+            "chapter-4 wheel, Wong snow, z_w = snow depth",
             _wong_terrain,
-            np.geomspace(2e3, 400e3, 81),
+            P_W_GRID,
             "p_w [Pa]",
-            note="Table 4.1 ratios c/p_w = 0.2165, tan phi = 0.0787, K = D/73.6; p_w fitted",
+            fixed=table41,
+            bounds=(WONG_P_W,),
         ),
         wheel_model(
             "tire_wong",
-            "deflecting tyre (103 kPa), Wong snow (z_w = h)",
+            "deflecting tyre (103 kPa), Wong snow, z_w = snow depth",
             _wong_terrain,
-            np.geomspace(2e3, 400e3, 81),
+            P_W_GRID,
             "p_w [Pa]",
             make_wheel=_civ_tire,
-            note="DeflectingTire p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section "
-            "height 0.75 b (assumed); snow as the row above; p_w fitted",
+            fixed=f"{civ}; {table41}",
+            bounds=(WONG_P_W,),
+            compare_to="wheel_wong",
         ),
         wheel_model(
             "wheel_wong_pit",
@@ -290,8 +409,8 @@ def validation_models(
             PIT_GRID,
             "p_w [Pa], rho_f [kg/m^3]",
             fit_target="both",
-            note="z_w = h (1 - rho0 / rho_f) (CRREL 95-7 eq. 1); Table 4.1 ratios; p_w and "
-            "rho_f fitted to sinkage and R/W together",
+            fixed=f"z_w = h (1 - rho0 / rho_f) (CRREL 95-7 eq. 1); {table41}",
+            bounds=(WONG_P_W, FINAL_DENSITY),
         ),
         wheel_model(
             "tire_wong_pit",
@@ -301,34 +420,8 @@ def validation_models(
             "p_w [Pa], rho_f [kg/m^3]",
             make_wheel=_civ_tire,
             fit_target="both",
-            note="the tyre of the row above on the snow of the row above",
-        ),
-        wheel_model(
-            "wheel_bekker",
-            "chapter-4 wheel, Bekker snow (unlimited depth)",
-            _bekker_terrain,
-            np.geomspace(0.1, 100.0, 61),
-            "scale of (k_c, k_phi)",
-            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor",
-        ),
-        ValidationModel(
-            "bekker",
-            "Bekker closed form (2.24/2.25)",
-            "z0 and R_c of (2.25)",
-            bekker_closed,
-            grid=np.geomspace(0.1, 100.0, 121),
-            fit_target="sinkage",
-            parameter="scale of (k_c, k_phi)",
-            note="thesis lab snow n = 1.0707, k_c, k_phi scaled by a fitted factor",
-        ),
-        ValidationModel(
-            "van_es",
-            "Van Es (2.26), D_c only",
-            "D_c with rho_f = 500 kg/m^3, lambda = 1",
-            van_es,
-            grid=np.geomspace(1e4, 1e8, 161),
-            fit_target="coefficient",
-            parameter="sigma_i [Pa]",
-            note="sigma_i fitted to the resistance coefficient; D_r = D_d = 0",
+            fixed=f"{civ}; the snow of the row above",
+            bounds=(WONG_P_W, FINAL_DENSITY),
+            compare_to="wheel_wong_pit",
         ),
     ]
