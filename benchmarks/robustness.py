@@ -4,13 +4,16 @@
     python benchmarks/robustness.py --cases 100000  # quicker
     python benchmarks/robustness.py --no-readme
 
-Then the any-terrain families (`--terrain-cases`, default 100,000 each): every terrain law
+Then the any-terrain families (`--terrain-cases`, default 100,000 each; also the tyre and
+rut families below): every terrain law
 (Wong snow on the general quadrature, Bekker, Reece, layered snow), the front region and
 Wong–Reece, straight running and slip angles up to 60 degrees with and without sidewall
 bulldozing (`tests/random_cases.py`, the ranges of the property tests; a tenth of the cases
 rest on the base with the braking sign change of the shear displacement at the axle), in
 float64 and float32: statuses, non-finite fields outside INVALID_INPUT, the load balance of
-the straight families, and the float32 sinkage error.
+the straight families, and the float32 sinkage error.  Then deflecting tyres (soft with
+flexing, and stiff ones against the rim) and ruts (zero depth, mid-depth, at the base) on
+every law.
 
 Random in-range cases (`benchmarks/cases.py`: WongSnow front region, slips -0.5 to 0.99,
 so about a third brake), every shear model, float64 and float32.  Per shear model and
@@ -46,7 +49,12 @@ from rich.progress import track  # noqa: E402
 
 import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402
-from tests.random_cases import KINDS, UNIT_ROWS, any_terrain_inputs  # noqa: E402
+from tests.random_cases import (  # noqa: E402
+    KINDS,
+    UNIT_ROWS,
+    any_terrain_inputs,
+    tire_and_rut_inputs,
+)
 
 SHEARS = ("classic", "simplified", "none")
 FIELDS = ("entry_angle", "sinkage", "motion_resistance", "thrust", "drawbar_pull", "torque")
@@ -197,6 +205,82 @@ def any_terrain_family(kind, family, n, seed=13):
     )
 
 
+# (label, wheel, Wong–Reece) of the tyre and rut families.
+TIRE_FAMILIES = (
+    ("tyre, front region", "tire", False),
+    ("tyre, Wong–Reece", "tire", True),
+    ("rut, front region", "rut", False),
+)
+
+
+def _solve_chunks(wheel, terrain, dist, load, slip, n):
+    """`solve_wheel` over `CHUNK`-sized pieces: NumPy fields and status."""
+    parts = []
+    for k in range(0, n, CHUNK):
+        take = (
+            lambda t, k=k: jax.tree_util.tree_map(  # noqa: E731
+                lambda x: x[k : k + CHUNK] if np.ndim(x) else x, t
+            )
+        )
+        st = sj.solve_wheel(
+            take(wheel), take(terrain), load[k : k + CHUNK], slip[k : k + CHUNK],
+            distribution=None if dist is None else take(dist),
+        )  # fmt: skip
+        parts.append({f: np.asarray(getattr(st, f)) for f in (*FIELDS, "status")})
+    return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
+
+
+def tire_and_rut_family(kind, family, n, seed=17):
+    """Statuses and checks of one tyre or rut family: a row of the third table.  The
+    tyres are half soft (10 kPa-1 MPa, with flexing), half stiff (1e9 Pa), compared with
+    the rim; the ruts a third each of zero depth, mid-depth and at the base."""
+    label, what, wong_reece = family
+    rng = np.random.default_rng(seed)
+    unit, extra = rng.uniform(size=(UNIT_ROWS, n)), rng.uniform(size=(3, n))
+    corner = rng.uniform(size=n) < 0.1
+    states, rims = {}, {}
+    for dtype in (np.float64, np.float32):
+        rim, tires, terrain, dist, load, slip, ruts = tire_and_rut_inputs(
+            kind, unit, extra, corner, dtype
+        )
+        dist = dist if wong_reece else None
+        wheel, ground = (tires, terrain) if what == "tire" else (rim, ruts)
+        states[dtype] = _solve_chunks(wheel, ground, dist, load, slip, n)
+        if what == "tire":
+            rims[dtype] = _solve_chunks(rim, terrain, dist, load, slip, n)
+    st64, st32 = states[np.float64], states[np.float32]
+    counts = [int(np.sum(st64["status"] == s)) for s in (0, 1, 4, 3, 2)]
+
+    def non_finite(st):
+        bad = np.zeros(n, bool)
+        for f in FIELDS:
+            bad |= ~np.isfinite(st[f])
+        return int(np.sum(bad & (st["status"] != Status.INVALID_INPUT)))
+
+    stiff = "—"
+    if what == "tire":  # the stiff half against the rim: worst relative difference
+        worst = []
+        for dtype in (np.float64, np.float32):
+            tire, rim = states[dtype], rims[dtype]
+            half = slice(n // 2, None)
+            same = tire["status"][half] == rim["status"][half]
+            rel = [
+                np.abs(tire[f][half] - rim[f][half])
+                / np.maximum(np.abs(rim[f][half]), np.abs(rim["motion_resistance"][half]))
+                for f in ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque")
+            ]
+            worst.append(f"{np.nanmax(rel):.1e} ({int(np.sum(~same))} statuses differ)")
+        stiff = " / ".join(worst)
+    both = (st64["status"] == Status.CONVERGED) & (st32["status"] == Status.CONVERGED)
+    rel = np.abs(st32["sinkage"][both] / st64["sinkage"][both] - 1)
+    q = np.quantile(rel, [0.5, 0.999]) if rel.size else [np.nan, np.nan]
+    return (
+        f"| {kind} | {label} | {n:,} | {counts[0]:,} | {counts[1]:,} | {counts[2]:,} |"
+        f" {counts[3]:,} | {counts[4]:,} | {non_finite(st64)} / {non_finite(st32)} | {stiff} |"
+        f" {q[0]:.1e} / {q[1]:.1e} / {np.max(rel) if rel.size else np.nan:.1e} |"
+    )
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=1_000_000, help="cases per shear model")
@@ -279,6 +363,22 @@ def main(argv=None):
     jobs = [(kind, family) for kind in KINDS for family in ANY_FAMILIES]
     for kind, family in track(jobs, description="any terrain", console=console):
         lines.append(any_terrain_family(kind, family, m))
+    lines += [
+        "",
+        f"Deflecting tyres and ruts: {m:,} random cases per family (the any-terrain cases"
+        " above; `tests/random_cases.py`): half the tyres soft (p_i 10 kPa-1 MPa, p_c and"
+        " flexing), half stiff (1e9 Pa), the stiff ones compared with the rim; the ruts a"
+        " third each of zero depth, of a random share of the base's depth and at the base"
+        " (a leader that bottomed out), classic shear, float64 and float32.",
+        "",
+        "| terrain | family | cases | converged | bottomed out | angle limit | not converged"
+        " | invalid | non-finite outside INVALID_INPUT (f64 / f32) | stiff tyre vs rim, worst"
+        " relative difference (f64 / f32) | float32 sinkage error (median / 99.9 % / max) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    jobs = [(kind, family) for kind in KINDS for family in TIRE_FAMILIES]
+    for kind, family in track(jobs, description="tyres and ruts", console=console):
+        lines.append(tire_and_rut_family(kind, family, m))
     lines += [
         "",
         f"* Measured {time.strftime('%Y-%m-%d')} with `python benchmarks/robustness.py"

@@ -159,6 +159,7 @@ from ._empirical.crrel import crrel_drawbar as crrel_drawbar
 from ._empirical.crrel import crrel_final_density as crrel_final_density
 from ._empirical.crrel import crrel_sinkage as crrel_sinkage
 from ._empirical.crrel import crrel_wheel as crrel_wheel
+from ._validate.models import ParameterBound as ParameterBound
 from ._validate.validate import ValidationModel as ValidationModel
 from ._validate.validate import ValidationResult as ValidationResult
 from ._validate.validate import crrel_95_1_examples as crrel_95_1_examples

@@ -19,7 +19,7 @@ import numpy as np
 from .._constants import PLATE_RULE_P_W, THESIS_P_W
 from .._empirical.common import ICE_DENSITY
 
-__all__ = ["Bound", "ValidationModel", "validation_models", "wheel_validation_model"]
+__all__ = ["ParameterBound", "ValidationModel", "validation_models", "wheel_validation_model"]
 
 DEFAULT_WHEEL_LOAD = 6800.0  # [N], CRREL 95-7 Table 2 (interpretation, see module docs)
 DEFAULT_TYRE_WIDTH = 0.235  # [m], assumption
@@ -29,7 +29,7 @@ CIV_SECTION_RATIO = 0.75  # section height / width [-], an assumption (a 75-seri
 
 
 @dataclasses.dataclass(frozen=True)
-class Bound:
+class ParameterBound:
     """The range a calibrated parameter may take, and where it comes from.
 
     - `name`: the parameter, with its unit ("rho_f [kg/m^3]").
@@ -46,7 +46,7 @@ class Bound:
 # rho_f: CRREL 95-7 (Richmond, Shoop & Blaisdell 1995, beside eq. 1) gives the final
 # density of snow under a tyre or track by its peak contact pressure: 500 kg/m^3 up to
 # 210 kPa, 550, 600 and 650 kg/m^3 above 210, 350 and 700 kPa.
-FINAL_DENSITY = Bound(
+FINAL_DENSITY = ParameterBound(
     "rho_f [kg/m^3]",
     500.0,
     650.0,
@@ -55,7 +55,7 @@ FINAL_DENSITY = Bound(
 # p_w: the thesis's two values for fresh snow, Wong's plate rule on its plate test
 # (Table 2.1: 12.92 kPa) and the value that makes its Table 4.1 entry angle the 5 kN
 # no-shear equilibrium of its tyre (85.55 kPa; `WongSnow.thesis_fresh_snow`).
-WONG_P_W = Bound(
+WONG_P_W = ParameterBound(
     "p_w [Pa]",
     PLATE_RULE_P_W,
     THESIS_P_W,
@@ -79,7 +79,7 @@ class ValidationModel:
     `"coefficient"`, or `"both"`: their squared errors in units of `BOTH_SCALES`).
 
     - `fixed`: the parameters set without the rows, and their sources.
-    - `bounds`: a calibration's `Bound` per grid column.
+    - `bounds`: a calibration's `ParameterBound` per grid column.
     - `row_inputs`: measured quantities of the scored rows the model takes as input
       beyond their snow's depth and density (e.g. the measured sinkage).
     - `compare_to`: the key of the rigid-wheel model on the same snow and grid, for a
@@ -95,7 +95,7 @@ class ValidationModel:
     parameter: str = ""
     note: str = ""
     fixed: str = ""
-    bounds: tuple[Bound, ...] = ()
+    bounds: tuple[ParameterBound, ...] = ()
     row_inputs: str = ""
     compare_to: str | None = None
 
@@ -180,7 +180,7 @@ def wheel_validation_model(
     fit_target: str = "sinkage",
     note: str = "",
     fixed: str = "",
-    bounds: tuple[Bound, ...] = (),
+    bounds: tuple[ParameterBound, ...] = (),
     compare_to: str | None = None,
 ) -> ValidationModel:
     """The chapter-4 wheel (`snowjax.solve_wheel`, towed: slip 0, classic shear) on any

@@ -13,7 +13,7 @@ Every model predicts the sinkage [m] and/or the resistance coefficient R/W [-] o
 row of Table 11.  A **prediction** takes every parameter from the literature or from other
 data (its source named), nothing from the rows it is scored on.  A **calibration** chooses
 its parameters on the rows (grid search, least squares), each within a range taken from a
-cited source (`Bound`), and is scored by **cross-validation that refits it per fold**:
+cited source (`ParameterBound`), and is scored by **cross-validation that refits it per fold**:
 the rows are grouped by their snow (Table 11's only record of which snow a row was
 measured in is its density: 160, 170 and 220 kg/m^3), and each group is predicted with the
 parameters chosen on the other groups (`groups="row"`: leave-one-out instead).  The

@@ -190,10 +190,14 @@ def _stresses_at(theta, theta_eff, theta0, diameter, terrain, width, tread, guar
         _below_base(z, terrain.depth) if guard else z, width
     )
     if terrain.has_base():
-        # The lowest point's clearance is >= 0 (a wheel resting on the base: 0, which
-        # depth - low can miss by a rounding error; a negative one would swamp the
-        # clearance of the nodes next to it).
-        clearance = jnp.maximum(terrain.depth - low, 0.0) + rise
+        # The lowest point's clearance, 0 within 4 ulp of the base: a wheel resting on
+        # the base (the solver's cap, an entry angle rounded from the base's depth) has
+        # none, and a rounding error of depth - low (float32: 1e-8 z_w) would otherwise
+        # stand for it next to a singularity (the thrust of a bottomed, braked wheel:
+        # 2e-3 in float32), or, negative, swamp the clearance of the nodes next to it.
+        gap = terrain.depth - low
+        eps = jnp.finfo(gap.dtype).eps
+        clearance = jnp.where(gap > 4 * eps * terrain.depth, gap, 0.0) + rise
         tiny = jnp.finfo(clearance.dtype).tiny
         sigma = terrain.pressure_at_clearance(jnp.maximum(clearance, tiny), width)
     if tread is not None:
