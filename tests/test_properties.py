@@ -313,6 +313,24 @@ def test_tyres_and_ruts_never_nan_and_a_stiff_tyre_is_the_rim(cases, kind, dtype
             assert np.all(error <= 0), (kind, dist, name, got[error > 0], expected[error > 0])
 
 
+@pytest.mark.parametrize("kind", ["wong", "bekker", "reece", "layered"])
+@settings(max_examples=5, deadline=None, derandomize=True, phases=NO_SHRINK)
+@given(cases=ANY_BATCHES, moduli=st.tuples(_log_uniform(1e4, 1e8), _log_uniform(1e-3, 1e9)))
+def test_a_deeper_rut_never_leaves_a_shallower_floor(cases, moduli, kind):
+    """`Rut.floor_depth` is non-decreasing in `rut_sinkage` from the surface to the base
+    (0.5 m on a law without one), for random terrains of every law and unloading moduli
+    k_0 10 kPa/m-100 MPa/m, A_u up to 1 GPa/m^2 (the audit: on Wong snow the floor
+    returned to the surface as the rut reached the base)."""
+    terrain = _any_terrain_inputs(kind, cases, jnp.float64)[1]
+    depth = np.asarray(terrain.depth)
+    base = np.where(np.isfinite(depth), depth, 0.5)
+    z_u = jnp.asarray(np.linspace(0.0, 1.0, 2001)[:, None] * base)  # (grid, batch)
+    floor = np.asarray(sj.Rut(terrain, z_u, 0.3, *moduli).floor_depth)
+    assert np.all(np.isfinite(floor))
+    assert np.all(np.diff(floor, axis=0) >= -1e-12 * base), np.diff(floor, axis=0).min()
+    assert np.all((floor >= 0) & (floor <= np.asarray(z_u) * (1 + 1e-12)))
+
+
 # ---------------------------------------------------------------------------------------
 # 2. Dissipation: the snow never drives a wheel or a vehicle
 # ---------------------------------------------------------------------------------------

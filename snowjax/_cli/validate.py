@@ -1,10 +1,13 @@
 """`snowjax validate`: compare the models with measured snow data and write `report.md`.
 
 `snowjax validate [--out DIR] [--include-uncertain] [--wheel-load N] [--tyre-width M]` runs
-`snowjax.validate` (snowjax/_validate/): leave-one-out predictions of Shoop (2001),
-ERDC/CRREL TR-01-16 Table 11 (sinkage and snow resistance coefficient of a leading tyre) by
-the CRREL shallow-snow model, Richmond (2.23), the chapter-4 rigid wheel (Wong and Bekker
-snow), Bekker (2.24/2.25) and Van Es (2.26), plus the CRM-1 worked examples of CRREL 95-1.
+`snowjax.validate` (snowjax/_validate/): Shoop (2001), ERDC/CRREL TR-01-16 Table 11
+(sinkage and snow resistance coefficient of a leading tyre) modelled by the CRREL
+shallow-snow model, Richmond (2.23), Van Es (2.26), the chapter-4 wheel and the deflecting
+tyre on Wong snow and Bekker (2.24/2.25): predictions (no parameter from the rows) and
+calibrations (fitted within cited bounds, cross-validated by snow with the fit repeated
+per fold), with each model's skill against the mean; plus the CRM-1 worked examples of
+CRREL 95-1.
 Writes report.md, metrics.csv, predictions.csv, crrel_95_1_examples.csv and
 predicted_vs_measured.png.  JAX is imported lazily and runs in float64.
 
@@ -27,9 +30,10 @@ def register(sub) -> None:
     p = sub.add_parser(
         "validate",
         help="compare every model with measured snow data (Shoop 2001, CRREL 95-1)",
-        description="Leave-one-out validation of the snowjax models against measured "
-        "sinkage and resistance in snow (Shoop 2001, ERDC/CRREL TR-01-16, Table 11) and "
-        "the CRM-1 examples of CRREL 95-1; writes report.md, CSVs and a figure.",
+        description="Predictions and cross-validated calibrations of the snowjax models "
+        "against measured sinkage and resistance in snow (Shoop 2001, ERDC/CRREL TR-01-16, "
+        "Table 11) and the CRM-1 examples of CRREL 95-1; writes report.md, CSVs and a "
+        "figure.",
     )
     p.add_argument(
         "--out",

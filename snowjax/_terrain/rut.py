@@ -19,9 +19,12 @@ rebound outgrow the compaction).  With it the floor z_r = max(z_u - p_u / k_u, 0
 rises as z_u grows: where the tangent governs, dz_r/dz_u = p_u sigma'' / sigma'^2 >= 0 on
 a law that is convex there (Wong's, Bekker's with n >= 1), and on a concave law with
 sigma(0) = 0 (Bekker's n < 1) p_u / sigma' >= z_u, so the floor is the surface; where
-k_0 + A_u z_u governs, dz_r/dz_u >= 1 - sigma' / k_u >= 0.  On Wong snow the tangent
-p_w / (z_w - z_u) governs near the base, and the rebound (z_w - z_u) ln(z_w / (z_w -
-z_u)) vanishes there: a rut pressed to the base (a bottomed-out leader, z_u = z_w,
+k_0 + A_u z_u governs, dz_r/dz_u >= 1 - sigma' / k_u >= 0.  Where the law drops at a
+breakpoint (`LayeredSnow`'s ice failure) so does the rebound's pressure, but not always
+the ratio to a softer tangent: there the floor is kept at least as deep as a rut ending
+just above the breakpoint leaves it (a running maximum over the breakpoints).  On Wong
+snow the tangent p_w / (z_w - z_u) governs near the base, and the rebound (z_w - z_u)
+ln(z_w / (z_w - z_u)) vanishes there: a rut pressed to the base (a bottomed-out leader, z_u = z_w,
 p_u = +inf) has its floor on the base, and a later wheel rests on the base.
 
 p_u and with it the rebound are those of the earlier wheel's width b_1 (`width`).
@@ -123,13 +126,10 @@ class Rut(AbstractTerrain):
         """K [m] of the virgin terrain at its surface."""
         return self.virgin.shear_modulus
 
-    @property
-    def reloading_depth(self) -> Array:
-        """d = min(p_u / k_u, z_u) [m]: the depth of the reloading branch below the
-        floor (the elastic rebound), p_u the earlier wheel's pressure at z_u, k_u =
-        max(k_0 + A_u z_u, dsigma/dz(z_u)) (module docstring); 0 for a rut pressed to the
-        base (p_u infinite: nothing left to spring back)."""
-        z_u = self.rut_sinkage
+    def _rebound(self, z_u) -> Array:
+        """min(p_u / k_u, z_u) [m] of a rut of depth `z_u` [m], k_u = max(k_0 + A_u z_u,
+        dsigma/dz(z_u)) (module docstring); 0 for a rut pressed to the base (p_u infinite:
+        nothing left to spring back)."""
         p_u, tangent = jax.jvp(
             lambda z: self.virgin.pressure(z, self.width), (z_u,), (jnp.ones_like(z_u),)
         )
@@ -139,8 +139,23 @@ class Rut(AbstractTerrain):
 
     @property
     def floor_depth(self) -> Array:
-        """z_r = z_u - d [m]: the rut's floor below the original surface."""
-        return self.rut_sinkage - self.reloading_depth
+        """z_r [m]: the rut's floor below the original surface, z_u - min(p_u / k_u, z_u),
+        and no shallower than the floor a rut ending just above one of the virgin law's
+        breakpoints would have (module docstring: where the law drops, as at
+        `LayeredSnow`'s ice failure, a deeper rut would otherwise rebound more)."""
+        z_u = self.rut_sinkage
+        floor = z_u - self._rebound(z_u)
+        for end in self.virgin.breakpoint_sinkages():
+            fixed = jax.lax.stop_gradient(end)
+            below = end - (fixed - jnp.nextafter(fixed, jnp.zeros_like(fixed)))
+            floor = jnp.where(end <= z_u, jnp.maximum(floor, below - self._rebound(below)), floor)
+        return floor
+
+    @property
+    def reloading_depth(self) -> Array:
+        """d = z_u - z_r [m]: the depth of the reloading branch below the floor (the
+        elastic rebound)."""
+        return self.rut_sinkage - self.floor_depth
 
     def pressure(self, sinkage, width):
         """sigma' [Pa] at the sinkage z' [m] below the rut's floor (module docstring)."""

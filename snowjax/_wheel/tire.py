@@ -32,8 +32,10 @@ terrain's `sinkage_at_pressure`) and delta = s - z_f follow, so every output is 
 is the limit m -> infinity.  As p_i -> infinity, p_f -> sigma(s) and the tyre is the
 rigid rim of the same diameter and width.
 
-On the flat the normal stress is vertical and the shear stress horizontal; the shear
-displacement grows along it as i x (the tread moves along the flat at the speed of the
+On the flat the normal stress is p_f itself, under every stress distribution (a
+Wong–Reece rear region's mapped stresses act on the curved exit; a point whose stress
+angle lies on the flat carries p_f too), vertical, and the shear stress horizontal; the
+shear displacement grows along it as i x (the tread moves along the flat at the speed of the
 undeflected circumference, omega r, as in Wong's treatment of the flat), so (4.10)
 becomes j = (arc length of the tread from the entry) - (1 - i)(x_entry - x).  The
 normal stress on the flat has a moment about the axle (arm x) and the shear stress
@@ -64,6 +66,18 @@ computed as 2 delta sqrt((D - delta) / (delta + delta_0)), delta_0 = 1e-9 D, lin
 delta below delta_0 (so a rounding error stays one, and the slope is right) and within
 delta_0 / (2 delta) of the chord above it (4e-7 relative at 1 mm).  And W_h uses p_f,
 not p_i + p_c: with p_i -> infinity the latter would multiply that rounding error.
+
+At a base and on a law that drops.  On a law with a base (Wong snow) the undeflected
+circle may pass the base by the section height, the flat staying above it, where the
+law reaches p_f; but a tyre whose p_i + p_c reaches the law's pressure `BASE_CLEARANCE`
+(1e-12) z_w above the base rests on the base like a rigid rim (its circle stops there,
+`Status.BOTTOMED_OUT`): the snow under its flat has nothing left to give, and without
+this a stiff tyre would carry the load a rim leaves to the base on snow within a
+rounding error of it.  On a law that drops where it breaks (`LayeredSnow`'s ice layer;
+`AbstractTerrain.pressure_rises` False) the tyre cannot press through a piece of the law
+that reaches more than p_i + p_c: the flat lies in the first such piece, else in the one
+holding s (`DeflectingTire._flat_on_pieces`); so a tyre softer than the ice rides on it
+and a stiff one breaks it where the rim does, and across that threshold the flat jumps.
 
 Not modelled: sidewall contact with the snow, and the tyre's growth of contact width
 with deflection (the width stays the section width b).  A deflection beyond the section
