@@ -1,7 +1,7 @@
 """Compare the wheel solver of two revisions, interleaved, on this machine.
 
     python benchmarks/compare.py 2280f0c            # that revision vs the working tree
-    python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --readme
+    python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --out compare.md
 
 Shared 2-core virtual machines drift by tens of percent between runs minutes apart, so
 two separate `benchmarks/run.py` tables cannot show a 10 % change.  This script checks out
@@ -14,8 +14,9 @@ in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and the cost of
 one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200 steps of
 10 ms); the first call of a fresh process (compile, batch 1); and the general quadrature:
 Bekker's Snow (U.S.) with Wong–Reece and the layered snow on the front region, batches 1
-and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  `--readme` writes the
-table between `<!-- compare:start -->` and `<!-- compare:end -->` in README.md.
+and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  The table is printed (`--out FILE`: also
+written there): it compares revisions, so it belongs in a commit message or the CHANGELOG,
+not on the documentation's pages.
 """
 
 from __future__ import annotations
@@ -139,12 +140,7 @@ def main(argv=None) -> None:
     parser.add_argument("revision", help="the old git revision (e.g. a commit hash)")
     parser.add_argument("--new", help="measure this revision instead of the working tree")
     parser.add_argument("--rounds", type=int, default=3)
-    parser.add_argument("--readme", action="store_true", help="write the table into README.md")
-    parser.add_argument(
-        "--marker",
-        default="compare",
-        help="README block <!-- MARKER:start --> (default %(default)s)",
-    )
+    parser.add_argument("--out", type=pathlib.Path, default=None, help="also write the table here")
     args = parser.parse_args(argv)
 
     def rev(name):
@@ -197,11 +193,8 @@ def main(argv=None) -> None:
         lines.append(f"| {name} | {_fmt(name, o)} | {_fmt(name, n)} | {n / o:.2f} |")
     table = "\n".join(lines)
     print(table)
-    if args.readme:
-        sys.path.insert(0, str(ROOT / "benchmarks"))
-        from readme_block import write_block  # noqa: PLC0415
-
-        write_block(args.marker, table)
+    if args.out is not None:
+        args.out.write_text(table + "\n", encoding="utf-8")
 
 
 if __name__ == "__main__":

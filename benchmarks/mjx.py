@@ -3,7 +3,7 @@ without the snow's wheel forces.
 
     python benchmarks/mjx.py            # 1, 1,024 and 4,096 environments (minutes on 2 cores)
     python benchmarks/mjx.py --quick    # fewer steps
-    python benchmarks/mjx.py --no-readme
+    python benchmarks/mjx.py --no-docs
 
 Needs the `mjx` extra.  The shipped rover (`snowjax.mjx.load_rover`: free-floating
 chassis, sprung wheels, Ackermann steering, 4 thesis tyres; 16 dofs) starts at 2 m/s with
@@ -21,7 +21,7 @@ The snowjax cost is the difference.  1,024 and 4,096 environments vmap the rollo
 environment on its own snow (p_w 60-200 kPa).  `--device gpu` runs on the GPU in float32
 (where one is present).  Timings are the best of three runs after the compile.  Prints
 the table and writes it between `<!-- mjx-benchmarks:start -->` and
-`<!-- mjx-benchmarks:end -->` in README.md.
+`<!-- mjx-benchmarks:end -->` in docs/guide/performance.md.
 """
 
 from __future__ import annotations
@@ -39,8 +39,8 @@ if "--device" not in sys.argv or "cpu" in sys.argv:  # float32 on a GPU (see --d
     jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
+from doc_block import add_no_docs, write_block  # noqa: E402
 from mujoco import mjx  # noqa: E402
-from readme_block import write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 from rich.table import Table  # noqa: E402
@@ -118,7 +118,7 @@ def measure(batch, steps, m, wheels, d0):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps per rollout")
-    parser.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
+    add_no_docs(parser)
     parser.add_argument("--device", choices=("cpu", "gpu"), default="cpu",
                         help="cpu (float64, default) or gpu (float32)")  # fmt: skip
     args = parser.parse_args(argv)
@@ -187,7 +187,7 @@ def main(argv=None):
         [
             *lines,
             "",
-            f"* Machine: {where}.  Measured {time.strftime('%Y-%m-%d')} with"
+            f"* Machine: {where}.  Measured with"
             f" `python benchmarks/mjx.py{' --quick' if args.quick else ''}`.",
             f"* {precision}; the shipped rover (16 dofs, 4 wheels); env-steps/s = environments"
             " x MJX steps (5 ms) per second.  Wheel forces = (MJX + snowjax step) - (MJX step):"
@@ -195,7 +195,7 @@ def main(argv=None):
             " Jacobians and the implicit update.",
         ]
     )
-    if not args.no_readme:
+    if not args.no_docs:
         write_block("mjx-benchmarks", text)
 
 

@@ -2,7 +2,7 @@
 
     python benchmarks/robustness.py                 # 10^6 cases per shear model (~10 min)
     python benchmarks/robustness.py --cases 100000  # quicker
-    python benchmarks/robustness.py --no-readme
+    python benchmarks/robustness.py --no-docs
 
 Then the any-terrain families (`--terrain-cases`, default 100,000 each; also the tyre and
 rut families below): every terrain law
@@ -23,7 +23,8 @@ convergence (W re-evaluated by `contact_forces`), the float32-vs-float64 sinkage
 quantiles over cases converged in both, the cost of a braking batch relative to a
 driving batch of the same size, non-finite gradients over converged cases, and an
 independent check of a few hundred cases against SciPy (quad + brentq).  Writes the
-table between `<!-- robustness:start -->` and `<!-- robustness:end -->` in README.md.
+table between `<!-- robustness:start -->` and `<!-- robustness:end -->` in
+docs/guide/reliability.md.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 from cases import in_range  # noqa: E402
-from readme_block import write_block  # noqa: E402
+from doc_block import add_no_docs, write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 
@@ -287,7 +288,7 @@ def main(argv=None):
     parser.add_argument(
         "--terrain-cases", type=int, default=100_000, help="cases per any-terrain family"
     )
-    parser.add_argument("--no-readme", action="store_true")
+    add_no_docs(parser)
     args = parser.parse_args(argv)
     console = Console()
     n = args.cases
@@ -381,12 +382,11 @@ def main(argv=None):
         lines.append(tire_and_rut_family(kind, family, m))
     lines += [
         "",
-        f"* Measured {time.strftime('%Y-%m-%d')} with `python benchmarks/robustness.py"
-        f" --cases {n} --terrain-cases {m}`.",
+        f"* Measured with `python benchmarks/robustness.py --cases {n} --terrain-cases {m}`.",
     ]
     text = "\n".join(lines)
     console.print(text)
-    if not args.no_readme:
+    if not args.no_docs:
         write_block("robustness", text)
 
 

@@ -2,10 +2,10 @@
 
     python benchmarks/run.py            # full run (about 3-5 minutes on 2 CPU cores)
     python benchmarks/run.py --quick    # smaller sizes (about 1-2 minutes)
-    python benchmarks/run.py --no-readme
+    python benchmarks/run.py --no-docs
 
-Prints a table and writes it (with the machine it ran on) into README.md between the
-markers `<!-- benchmarks:start -->` and `<!-- benchmarks:end -->`.  Float64 unless a row
+Prints a table and writes it (with the machine it ran on) into docs/guide/performance.md
+between the markers `<!-- benchmarks:start -->` and `<!-- benchmarks:end -->`.  Float64 unless a row
 says otherwise; thesis tyre (D = 0.736 m, b = 0.235 m) on the thesis's fresh snow
 (`WongSnow.thesis_fresh_snow()`), loads uniform in 1-9 kN and slips uniform in [0, 0.9]
 (classic shear) unless stated.  Every timing is the best of several runs after the
@@ -37,7 +37,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from readme_block import write_block  # noqa: E402
+from doc_block import add_no_docs, write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import Progress  # noqa: E402
 from rich.table import Table  # noqa: E402
@@ -350,7 +350,7 @@ def machine() -> str:
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="smaller sizes")
-    parser.add_argument("--no-readme", action="store_true", help="do not update README.md")
+    add_no_docs(parser)
     parser.add_argument("--json", type=pathlib.Path, help="also write the numbers as JSON")
     parser.add_argument(
         "--device",
@@ -571,7 +571,7 @@ def main(argv=None):
         console.print(f"GPU rows: {gpu_where}")
     markdown = "\n".join(
         [
-            f"Measured on: {where} ({time.strftime('%Y-%m-%d')}).",
+            f"Measured on: {where}, with `python benchmarks/run.py` (`make bench`).",
             "",
             *(
                 ["GPU rows (`GPU ...`) measured on: " + gpu_where + ".", ""]
@@ -589,9 +589,8 @@ def main(argv=None):
     )
     if args.json:
         args.json.write_text(json.dumps(dict(numbers, machine=where), indent=2))
-    if not args.no_readme:
-        write_block("benchmarks", markdown)
-        console.print("updated README.md")
+    if not args.no_docs:
+        console.print(f"updated {write_block('benchmarks', markdown)}")
     return 0
 
 

@@ -3,7 +3,7 @@ vehicles in their own ruts (`snowjax.Ruts` in `simulate_longitudinal`).
 
     python benchmarks/ruts.py            # about 3 minutes on 2 cores
     python benchmarks/ruts.py --quick    # fewer steps
-    python benchmarks/ruts.py --no-readme
+    python benchmarks/ruts.py --no-docs
 
 Float64, thesis tyre on the thesis's fresh snow, slip 0.2, 3.5 kN per wheel, four wheels
 (two axles 2.5 m apart, tracks 1.5 m apart) driving straight at 0.1 m per step over a
@@ -18,7 +18,7 @@ Float64, thesis tyre on the thesis's fresh snow, slip 0.2, 3.5 kN per wheel, fou
 
 Batch 1,024 vmaps the scan over 1,024 environments.  Best of three runs after the
 compile.  Prints the table and writes it between `<!-- rut-benchmarks:start -->` and
-`<!-- rut-benchmarks:end -->` in README.md.
+`<!-- rut-benchmarks:end -->` in docs/guide/performance.md.
 """
 
 from __future__ import annotations
@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import pathlib
 import sys
-import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
@@ -35,7 +34,7 @@ import jax  # noqa: E402
 jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
-from readme_block import write_block  # noqa: E402
+from doc_block import add_no_docs, write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 from rich.table import Table  # noqa: E402
@@ -127,7 +126,7 @@ def simulation(steps, ruts):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--quick", action="store_true", help="fewer steps")
-    parser.add_argument("--no-readme", action="store_true", help="do not rewrite README.md")
+    add_no_docs(parser)
     args = parser.parse_args(argv)
     cases = ((1, 50 if args.quick else 200), (1024, 5 if args.quick else 20))
     results = {}
@@ -177,12 +176,12 @@ def main(argv=None):
         f" {sim['off'] * 1e6 / 4:.1f} µs per wheel-step without ruts,"
         f" {sim['on'] * 1e6 / 4:.1f} µs with `Ruts` (rear axle in the front axle's ruts:"
         f" two solves in sequence per Newton evaluation), {sim['on'] / sim['off']:.2f}x.",
-        f"* Machine: {where}.  Measured {time.strftime('%Y-%m-%d')} with"
+        f"* Machine: {where}.  Measured with"
         f" `python benchmarks/ruts.py{' --quick' if args.quick else ''}`.",
     ]
     for line in notes:
         console.print(line)
-    if not args.no_readme:
+    if not args.no_docs:
         write_block("rut-benchmarks", "\n".join([*lines, "", *notes]))
 
 

@@ -90,3 +90,72 @@ def test_mkdocs_build_strict(tmp_path):
     html = page.read_text(encoding="utf-8")
     assert 'id="snowjax.solve_wheel"' in html
     assert (site / "notebooks" / "quick_start" / "index.html").is_file()
+
+
+# ---------------------------------------------------------------------------------------
+# The README and the guide
+# ---------------------------------------------------------------------------------------
+
+GUIDE = ROOT / "docs" / "guide"
+GUIDE_PAGES = (
+    "wheel", "terrains", "steering", "tyres", "ruts", "vehicles", "mjx", "calibration",
+    "sweeps", "validation", "performance", "reliability", "thesis", "extending",
+)  # fmt: skip
+NOTEBOOKS = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb"))
+# A commit hash (7-40 hex digits with a letter and a digit), a date (2026-11-27), an issue
+# number, or the words of a development log.
+HISTORY = re.compile(
+    r"\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\b"
+    r"|\b(19|20)\d\d-\d\d-\d\d\b"
+    r"|\b[Ii]ssues? #?\d+"
+    r"|issue's aim"
+)
+
+
+def python_blocks(text: str) -> list[str]:
+    """The ```python blocks of a Markdown page (at the start of a line; ```py blocks
+    are shown, not run)."""
+    return re.findall(r"^```python\n(.*?)^```", text, flags=re.M | re.S)
+
+
+def test_readme_is_a_front_door():
+    """At most 200 lines; the two commands first; every guide page linked."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert len(text.splitlines()) <= 200, len(text.splitlines())
+    commands = text.split("```bash\n", 1)[1].split("```", 1)[0].splitlines()
+    assert [c.split()[:2] for c in commands] == [["make", "reproduce"], ["make", "test"]]
+    for page in GUIDE_PAGES:
+        assert f"(docs/guide/{page}.md)" in text, page
+
+
+def test_no_history_in_the_readme_and_the_guide():
+    """No commit hash, date of a measurement, issue number or "issue's aim" in what a user
+    reads (the CHANGELOG keeps the history)."""
+    pages = [ROOT / "README.md", ROOT / "docs" / "index.md", *sorted(GUIDE.glob("*.md"))]
+    for page in pages:
+        found = [m.group(0) for m in HISTORY.finditer(page.read_text(encoding="utf-8"))]
+        assert not found, (page.name, found)
+
+
+def test_every_guide_page_and_notebook_is_on_the_site():
+    """Each guide page exists, has a runnable example (a ```python block) and is in the
+    site's navigation; every notebook is in the navigation and linked from the index."""
+    nav = (ROOT / "mkdocs.yml").read_text(encoding="utf-8")
+    index = (ROOT / "docs" / "index.md").read_text(encoding="utf-8")
+    assert sorted(p.stem for p in GUIDE.glob("*.md")) == sorted(GUIDE_PAGES)
+    for page in GUIDE_PAGES:
+        assert python_blocks((GUIDE / f"{page}.md").read_text(encoding="utf-8")), page
+        assert f"guide/{page}.md" in nav and f"guide/{page}.md" in index, page
+    assert len(NOTEBOOKS) == 7
+    for notebook in NOTEBOOKS:
+        assert f"notebooks/{notebook}" in nav and f"notebooks/{notebook}" in index, notebook
+
+
+def test_readme_quick_start_runs_as_written():
+    """The README's quick start, executed as written (float64)."""
+    text = (ROOT / "README.md").read_text(encoding="utf-8")
+    (block,) = python_blocks(text)
+    namespace: dict = {}
+    exec(compile(block, "README.md", "exec"), namespace)  # noqa: S102
+    st = namespace["st"]
+    assert int(st.status) == 0 and float(st.lateral_force) > 0

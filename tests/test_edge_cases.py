@@ -89,7 +89,7 @@ def test_a_leader_that_bottoms_out_leaves_a_rut_a_follower_rests_in():
 
 
 def test_vehicles_and_the_rut_map_run_where_the_leaders_bottom_out():
-    """The README's 4 x 3.5 kN vehicle on the plate-rule snow (which carries ~2.2 kN):
+    """The ruts guide's 4 x 3.5 kN vehicle on the plate-rule snow (which carries ~2.2 kN):
     the longitudinal and planar force functions with `Ruts` are finite with finite
     slopes (the audit: speed inf from the first step), and `drive_path` marks finite
     depths, none below the base (the audit: NaN cells)."""

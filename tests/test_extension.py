@@ -7,7 +7,7 @@ API only (`snowjax.AbstractTerrain`, `snowjax.AbstractStressDistribution`,
 `snowjax.parameter`, `snowjax.as_float`), and then run through `solve_wheel` (checked
 against the independent SciPy reference of `tests/reference_terrain.py`), `jax.grad`
 (against central differences), `fit_wheel` and `sweep`, with no other edit anywhere:
-the recipe of CONTRIBUTING's "Adding a terrain law, a stress distribution or a shear
+the recipe of the extending guide's "Adding a terrain law, a stress distribution or a shear
 law".  A shear law (`KondnerShear`) likewise, through both contact rules.
 """
 
@@ -140,6 +140,7 @@ def test_the_new_distribution_is_wong_reece_with_its_peak_at_the_axle():
     np.testing.assert_allclose(a.drawbar_pull, b.drawbar_pull, rtol=1e-10, atol=1e-8)
 
 
+@pytest.mark.slow  # gradients through both classes (make test-slow)
 def test_gradients_through_both_new_classes_match_central_differences():
     def out(modulus, rear):
         snow = eqx.tree_at(lambda s: s.modulus, _full(SNOW), jnp.full(N, modulus))
@@ -168,6 +169,7 @@ def test_bad_values_are_named_with_the_unit_and_range_of_the_field():
         sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, distribution=LinearRear(1.5))
 
 
+@pytest.mark.slow  # a fit's own compiles (make test-slow)
 def test_fit_wheel_recovers_both_new_classes_parameters():
     st = _solve(distribution=_full(REAR))
     start = HyperbolicSnow(3e5, 0.25, 2e3, 0.2, 0.01)
@@ -201,6 +203,7 @@ def test_fit_wheel_recovers_both_new_classes_parameters():
     assert result.info["transforms"] == {"modulus": "log", "rear": "log"}
 
 
+@pytest.mark.slow  # a sweep's own compiles (make test-slow)
 def test_sweep_rows_equal_solve_wheel(tmp_path):
     snows = [SNOW, eqx.tree_at(lambda s: s.modulus, SNOW, 5e5)]
     result = sj.sweep(

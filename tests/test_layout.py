@@ -95,13 +95,13 @@ def test_module_length():
     assert not long, "\n".join(long)
 
 
-def _contributing_linear_soil():
-    """The `LinearSoil` of CONTRIBUTING's recipe, executed as written there."""
-    text = (PKG.parent / "CONTRIBUTING.md").read_text()
-    recipe = text[text.index("### Adding a terrain law, a stress distribution or a shear law") :]
+def _recipe_linear_soil():
+    """The `LinearSoil` of the extending guide's recipe, executed as written there."""
+    text = (PKG.parent / "docs" / "guide" / "extending.md").read_text()
+    recipe = text[text.index("## Adding a terrain law, a stress distribution or a shear law") :]
     code = recipe[recipe.index("```python\n") + len("```python\n") : recipe.index("```\n\n")]
     namespace: dict = {}
-    exec(compile(code, "CONTRIBUTING.md", "exec"), namespace)
+    exec(compile(code, "extending.md", "exec"), namespace)
     return namespace["LinearSoil"]
 
 
@@ -130,7 +130,7 @@ def _plain_linear_soil():
     return LinearSoil
 
 
-@pytest.mark.parametrize("make", [_contributing_linear_soil, _plain_linear_soil])
+@pytest.mark.parametrize("make", [_recipe_linear_soil, _plain_linear_soil])
 def test_a_new_terrain_law_is_one_class(make):
     """A law defined outside the package (one class) runs through solve_wheel.
 

@@ -42,10 +42,9 @@ RADIUS = 0.368  # [m]
 
 
 def _readme_example():
-    """The Python block of the README's MuJoCo MJX section, as written there."""
-    text = (ROOT / "README.md").read_text(encoding="utf-8")
-    section = text.split("## MuJoCo MJX", 1)[1]
-    return section.split("```python\n", 1)[1].split("```", 1)[0]
+    """The first Python block of the guide's MuJoCo page, as written there."""
+    text = (ROOT / "docs" / "guide" / "mjx.md").read_text(encoding="utf-8")
+    return text.split("```python\n", 1)[1].split("```", 1)[0]
 
 
 @pytest.fixture(scope="module")
@@ -57,10 +56,10 @@ def rover():
 
 @pytest.fixture(scope="module")
 def readme():
-    """The README's example, run as written: 3 s from rest at 540 N m per wheel; its
+    """The guide's example, run as written: 3 s from rest at 540 N m per wheel; its
     jitted `run(snow, ctrl, qvel)` is reused by the other scenarios (one compile)."""
     namespace = {}
-    exec(compile(_readme_example(), "README.md (MuJoCo MJX)", "exec"), namespace)  # noqa: S102
+    exec(compile(_readme_example(), "docs/guide/mjx.md", "exec"), namespace)  # noqa: S102
     return namespace
 
 
@@ -71,7 +70,7 @@ def from_rest(readme):
 
 @pytest.fixture(scope="module")
 def run(readme):
-    """(initial qvel, ctrl, snow) -> 3 s `Rollout` of the README's compiled `run`."""
+    """(initial qvel, ctrl, snow) -> 3 s `Rollout` of the guide's compiled `run`."""
     return lambda qvel, ctrl, snow: readme["run"](snow, ctrl, qvel)
 
 
@@ -153,6 +152,7 @@ def _yaw_rate(qpos, qvel):
     return (rot.reshape(3, 3) @ np.asarray(qvel[3:6]))[2]
 
 
+@pytest.mark.slow  # a long steady turn (make test-slow)
 def test_steady_turn_radius_matches_simulate_planar(rover, run):
     """0.2 rad of (Ackermann) steering at 540 N m per wheel from 2 m/s: the turning radius
     |v| / yaw rate of the chassis agrees with `simulate_planar`'s for the same vehicle
@@ -217,6 +217,7 @@ def test_snow_never_delivers_power_and_never_pushes_a_braked_vehicle(rover, run)
     )
 
 
+@pytest.mark.slow  # two more MuJoCo models to compile (make test-slow)
 def test_no_nan_on_a_slope_and_on_a_height_field():
     """From rest, 1 s at 540 N m per wheel: on a 0.1 rad climb (the snow's frame follows
     the inclined floor: every wheel's normal is the floor's) and on a bumpy height field
@@ -249,6 +250,7 @@ def test_no_nan_on_a_slope_and_on_a_height_field():
             assert np.all(np.abs(loads / weight - 1) < 0.5)
 
 
+@pytest.mark.slow  # forward-mode tangents through a rollout (make test-slow)
 def test_forward_gradients_of_the_end_position(rover):
     """d(end x, end y)/d(p_w, steering) through 100 MJX steps (0.5 s) from 2 m/s, forward
     mode, against central differences."""
@@ -276,6 +278,7 @@ def test_forward_gradients_of_the_end_position(rover):
         np.testing.assert_allclose(jac[j], fd, rtol=1e-3, atol=1e-5 * np.abs(fd).max())
 
 
+@pytest.mark.slow  # a vmapped episode of 1,024 environments (make test-slow)
 def test_environment_runs_1024_randomised_instances_for_an_episode():
     """1,024 instances, each on its own snow and goal, for a whole (short: 10 steps of
     4 x 5 ms) episode, throttle and a proportional steering: no NaN, every instance done
@@ -309,6 +312,7 @@ def test_environment_runs_1024_randomised_instances_for_an_episode():
     assert one.obs.shape == (env.observation_size,) and float(one.done) == 0.0
 
 
+@pytest.mark.slow  # the example's own compiles (make test-slow)
 def test_evolution_strategies_example_improves_its_objective():
     """`examples/rover_reach_goal.py` on a small budget: 4 generations of 2 antithetic
     pairs on 1 episode each, 60-step (1.2 s) episodes; the objective (mean return over 4
@@ -328,7 +332,7 @@ def test_evolution_strategies_example_improves_its_objective():
 
 
 # The notebook's kernel compiles its own vmapped forward-mode rollout (about a minute on
-# 2 cores): `make test-all` runs it.
+# 2 cores): `make test-slow` runs it.
 @pytest.mark.slow
 def test_notebook_runs(tmp_path):
     nb = run_notebook("mjx_vehicle.ipynb", tmp_path)
@@ -351,6 +355,7 @@ def test_traced_bad_prescribed_loads_are_flagged(rover):
     assert np.all(np.isfinite(np.asarray(out.longitudinal_force)))
 
 
+@pytest.mark.slow  # the rover's step compiled again (make test-slow)
 def test_a_contact_model_traces_the_same_step(rover):
     """`ContactModel` in place of the terrain: the traced step is the one of the separate
     keywords (compared as jaxprs: no compile needed)."""

@@ -84,7 +84,7 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     # The same load (measured): on Wong snow the 177 mm rut rebounds 50 mm (the law's
     # tangent p_w / (z_w - z_u) = 3.7 MPa/m, stiffer than k_0 + A_u z_u = 1.9 MPa/m,
     # sets the unloading line) and the second wheel deepens it by 4 mm; on Bekker soil
-    # (rebound 8 mm) it sinks 46 mm further (see the README: a rigid wheel on a rut
+    # (rebound 8 mm) it sinks 46 mm further (see docs/guide/ruts.md: a rigid wheel on a rut
     # carries its load over a shorter arc).  On both its compaction resistance drops
     # (by 41 % and 26 %).  The heavier wheel passes z_u into the virgin terrain.
     total = np.asarray(st.sinkage) + float(rut.floor_depth[0])
@@ -95,6 +95,7 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     assert total[1] > z_u and float(st.sinkage[1]) > d
 
 
+@pytest.mark.slow  # gradients through two equilibria (make test-slow)
 def test_gradients_flow_from_the_first_wheel_into_the_second():
     """d(second wheel's sinkage, R, DP) / d(p_w, k_0, load) with the rut left by the first
     wheel on the same snow (p_w moves both wheels), forward mode against central
@@ -165,6 +166,7 @@ def test_multi_pass_is_the_chain_of_ruts_and_the_rut_deepens_to_the_base():
     np.testing.assert_allclose(res.sinkage[1, 3], snow.z_w, rtol=1e-12)
 
 
+@pytest.mark.slow  # the tyre's and the slip angle's solves on a rut (make test-slow)
 def test_a_tyre_and_a_slip_angle_on_a_rut():
     """A `DeflectingTire` on a rut: stiff (p_i = 1e12 Pa) it is the rim on the rut within
     1e-9; at 100 kPa it flattens and sinks less.  Under a slip angle on the rut: beta = 0
