@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed-stamp
 
-.PHONY: reproduce test test-all lint bench robustness clean
+.PHONY: reproduce test test-slow test-all lint bench robustness clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
@@ -20,17 +20,22 @@ LINTED := snowjax tests benchmarks examples notebooks docs/hooks
 # Lint, format and type checks first (seconds), then the suite on two workers: XLA:CPU runs
 # each compiled solve on one thread.  --dist loadscope keeps a test file on one worker, so
 # its module fixtures (simulations, the reproduce run) are computed once, not once per
-# worker (fresh clone of 0b4868e: 18 min 10 s of tests against 19 min 25 s without).
+# worker.  `make test` is the fast tier; `make test-slow` runs the rest (the notebooks,
+# the long simulations, the guide's examples); CI runs both (.ci/run).
+PYTEST := $(BIN)/python -m pytest -q -n 2 --dist loadscope
+
 test: lint
-	$(BIN)/python -m pytest -q -n 2 --dist loadscope -m "not slow" $(ARGS)
+	$(PYTEST) -m "not slow" $(ARGS)
+
+test-slow: $(STAMP)
+	$(PYTEST) -m slow $(ARGS)
 
 lint: $(STAMP)
 	$(BIN)/ruff check $(LINTED)
 	$(BIN)/ruff format --check $(LINTED)
 	$(BIN)/pyright snowjax
 
-test-all: $(STAMP)
-	$(BIN)/python -m pytest -q $(ARGS)
+test-all: test test-slow
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py $(ARGS)

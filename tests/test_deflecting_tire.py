@@ -57,7 +57,15 @@ CASES = {
 SLIPS = (0.2, -0.2)
 
 
-@pytest.mark.parametrize("case", list(CASES))
+@pytest.mark.parametrize(
+    "case",
+    [
+        pytest.param(
+            c, marks=pytest.mark.slow if c in ("own-law-front", "bekker-wong-reece-rear") else ()
+        )
+        for c in CASES
+    ],
+)
 def test_equilibrium_matches_scipy_reference_and_the_stiff_limit_is_the_rim(case):
     """Entry angle and forces of both modes within 1e-7 of quad + brentq (measured: at
     most 4.6e-13), the motion resistance with the flexing resistance f_h p_f b l of the
@@ -122,7 +130,7 @@ def test_flat_carries_the_tire_pressure_and_the_sinkage_stops_growing():
     assert np.all(np.diff(np.asarray(tire.deflection(st.entry_angle, SOIL))) > 0.01)
 
 
-@pytest.mark.slow  # two compiles of the slip-angle solve (make test-all)
+@pytest.mark.slow  # two compiles of the slip-angle solve (make test-slow)
 def test_infinitely_stiff_tire_under_a_slip_angle_is_the_rigid_wheel():
     """With a slip angle (the combined shear law, lateral force and aligning torque) p_i =
     1e12 Pa reproduces `RigidWheel` to 1e-9."""
@@ -148,6 +156,7 @@ def _outputs(x, terrain, slip=0.2):
     return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
 
 
+@pytest.mark.slow  # gradients on both sides of the switch (make test-slow)
 def test_gradients_match_central_differences_across_the_mode_boundary():
     """d(sinkage, R, DP, M) / d(p_i, p_c, load, p_w or k_phi, tan phi) by the implicit
     function theorem (R and DP with the flexing resistance, whose sqrt(delta) must stay
@@ -193,6 +202,7 @@ def _slope_jump(sharpness, spacing):
     return float(jnp.max(jnp.abs(jnp.diff(slope)))), float(jnp.max(jnp.abs(slope)))
 
 
+@pytest.mark.slow  # a fine scan of the switch (make test-slow)
 def test_switch_is_continuous_in_value_and_slope():
     """C1 across the mode boundary: the slope's largest jump between neighbours shrinks
     with the spacing (like the spacing, for a continuous slope).  The books' hard switch
@@ -272,6 +282,7 @@ def test_wheel_forces_of_a_simulation_step_are_the_tires_equilibrium():
     assert float(flexing) > 50.0
 
 
+@pytest.mark.slow  # a fit through the tyre's solve (make test-slow)
 def test_fit_wheel_recovers_the_carcass_pressure():
     """Synthetic sinkage and drawbar pull of a tyre with p_c = 8 kPa on Bekker soil;
     `fit_wheel` from p_c = 3 kPa recovers it with tan phi (names `wheel.<field>`)."""
@@ -301,7 +312,7 @@ def test_fit_wheel_recovers_the_carcass_pressure():
 @pytest.mark.slow
 def test_both_simulations_and_mjx_take_the_tire():
     """A short run of `simulate_longitudinal`, `simulate_planar` and `snowjax.mjx.rollout`
-    on the tyre (their compiles take most of a minute: `make test-all`); each ends
+    on the tyre (their compiles take most of a minute: `make test-slow`); each ends
     without NaN, converged, with the tyre's sinkage (below the rigid rim's)."""
     from mujoco import mjx
 

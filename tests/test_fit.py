@@ -751,7 +751,7 @@ def test_cli_missing_file_and_bad_fit_arguments(tmp_path, capsys):
 # ---------------------------------------------------------------------------------------
 
 
-@pytest.mark.slow  # a kernel and its own compiles: 13 s of a worker (make test-all)
+@pytest.mark.slow  # a kernel and its own compiles: 13 s of a worker (make test-slow)
 def test_calibration_notebook_runs(tmp_path):
     nb = run_notebook("calibration.ipynb", tmp_path)
     text = outputs_text(nb)

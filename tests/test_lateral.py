@@ -167,7 +167,7 @@ SLIPS = np.array([-0.5, -0.2, 0.0, 0.2, 0.5, 0.9])
 LOADS = {"fresh": 3000.0, "plate_rule": 1500.0, "snow_us": 1000.0}
 
 
-@pytest.mark.parametrize("name", ["fresh", "snow_us"])
+@pytest.mark.parametrize("name", ["fresh", pytest.param("snow_us", marks=pytest.mark.slow)])
 def test_zero_slip_angle_reproduces_straight_running(name):
     terrain = SHIPPED_SNOWS[name]
     dist = sj.WongReece(0.43, 0.32) if name == "snow_us" else None
@@ -192,7 +192,10 @@ def test_zero_slip_angle_reproduces_straight_running(name):
     np.testing.assert_array_equal(traced.aligning_torque, 0.0)
 
 
-@pytest.mark.parametrize("name", list(SHIPPED_SNOWS))
+@pytest.mark.parametrize(
+    "name",
+    [pytest.param(n, marks=pytest.mark.slow if n == "snow_us" else ()) for n in SHIPPED_SNOWS],
+)
 def test_lateral_force_is_odd_and_grows_with_slip_angle_up_to_30_degrees(name):
     terrain = SHIPPED_SNOWS[name]
     betas = np.deg2rad(np.arange(2.5, 30.01, 2.5))[:, None]
@@ -234,6 +237,7 @@ def test_resultant_shear_never_exceeds_mohr_coulomb():
 # --------------------------------------------------------------------------------------
 
 
+@pytest.mark.slow  # a gradient per leaf, compiled (make test-slow)
 def test_gradients_wrt_every_leaf_match_central_differences():
     """d(sinkage, drawbar pull, F_y, M_z)/d(every leaf, load, slip, beta) against central
     differences, on Bekker + Wong–Reece with bulldozing (the model with every term)."""
@@ -311,6 +315,7 @@ def test_bad_slip_angle_and_lateral_inputs():
     ],
     ids=["reece", "layered"],
 )
+@pytest.mark.slow  # two more laws with slip angles (make test-slow)
 def test_every_terrain_law_batched_with_slip_angle(terrain):
     betas = np.deg2rad([[-20.0], [0.0], [20.0]])
     st = sj.solve_wheel(
@@ -323,6 +328,7 @@ def test_every_terrain_law_batched_with_slip_angle(terrain):
     assert np.all(st.lateral_force[2] > 0) and np.all(st.lateral_force[1] == 0)
 
 
+@pytest.mark.slow  # the slip-angle solve compiled in float32 (make test-slow)
 def test_float32_has_no_nan():
     f32 = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32), t)  # noqa: E731
     st = sj.solve_wheel(
@@ -339,6 +345,7 @@ def test_float32_has_no_nan():
     np.testing.assert_allclose(st.lateral_force, ref64.lateral_force, rtol=1e-4)
 
 
+@pytest.mark.slow  # a fit of the lateral modulus (make test-slow)
 def test_fit_wheel_recovers_lateral_modulus_from_synthetic_lateral_forces():
     """fit_wheel with slip angles: K_y and tan(phi) come back from noise-free synthetic
     (sinkage, drawbar pull, lateral force) data made by solve_wheel."""

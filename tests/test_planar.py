@@ -9,8 +9,6 @@ they share that compile.  Besides it: one `simulate_longitudinal` program (the
 straight-driving reference), small eager checks, and the notebook.
 """
 
-import threading
-
 import diffrax
 import jax
 import jax.numpy as jnp
@@ -21,6 +19,11 @@ import snowjax as sj
 from snowjax import PlanarVehicle, Status, SteeringProfile, planar_wheel_kinematics, simulate_planar
 
 from .notebook_runner import outputs_text, run_notebook
+
+# The whole file is in the slow tier (make test-slow): its one program, 40 implicit steps
+# with forward-mode derivatives, compiles for about a minute.  `make test` reaches the
+# planar vehicle's wheel forces through tests/test_properties.py and test_rut_vehicles.py.
+pytestmark = pytest.mark.slow
 
 EPS = 0.05  # default speed_eps [m/s]
 WHEEL = sj.RigidWheel.thesis_tire()
@@ -77,33 +80,6 @@ def _x(steering, torque, u0=0.0, r0=0.0):
 def _drive(snows, rows):
     traj, jac = _run(snows, jnp.asarray(np.stack(rows)))
     return traj, np.asarray(jac)
-
-
-class _BackgroundNotebook:
-    """`notebooks/planar_vehicle.ipynb` (small sizes), run in a thread started when the
-    module starts: its kernel compiles its own program while the tests compile theirs."""
-
-    def __init__(self, directory):
-        self.directory = directory
-        self.notebook = self.error = None
-        self.thread = threading.Thread(target=self._run, daemon=True)
-        self.thread.start()
-
-    def _run(self):
-        try:
-            self.notebook = run_notebook("planar_vehicle.ipynb", self.directory)
-        except BaseException as err:  # re-raised in the test
-            self.error = err
-
-
-@pytest.fixture(scope="module", autouse=True)
-def background_notebook(request, tmp_path_factory):
-    if "test_notebook_runs" not in {item.name for item in request.session.items}:
-        yield None
-        return
-    work = _BackgroundNotebook(tmp_path_factory.mktemp("notebook"))
-    yield work
-    work.thread.join(timeout=600)
 
 
 def _row(traj, k):
@@ -434,15 +410,8 @@ def test_a_steering_controller_out_of_range_stops_the_run():
 # ----------------------------------------------------------------------------------------
 
 
-# Its kernel compiles its own programs beside the two workers: 32 s of a core (2026-11-26),
-# which the test's own duration does not show.  `make test-all` runs it.
-@pytest.mark.slow
-def test_notebook_runs(background_notebook):
+def test_notebook_runs(tmp_path):
     """A lane change on two snows, then Gauss–Newton steering to a 2 m offset."""
-    background_notebook.thread.join(timeout=600)
-    assert not background_notebook.thread.is_alive(), "the notebook did not finish in 600 s"
-    if background_notebook.error is not None:
-        raise background_notebook.error
-    text = outputs_text(background_notebook.notebook)
+    text = outputs_text(run_notebook("planar_vehicle.ipynb", tmp_path))
     assert "fresh (85.55 kPa)" in text
     assert text.count("end offset 2.0000 m") == 2

@@ -37,7 +37,6 @@ from snowjax import Status
 from snowjax._sim.planar import _body_to_wheel, _planar_wheel_forces
 
 from .random_cases import UNIT_ROWS, any_terrain_inputs, tire_and_rut_inputs
-from .xla import optimised
 
 SHEAR_MODELS = ("classic", "simplified", "none")
 BATCH = 24
@@ -123,6 +122,16 @@ def _check_state(state, dtype, label, fields=FIELDS):
     return status
 
 
+def _tiers(fast, kinds=("wong", "bekker", "reece", "layered")):
+    """Every (kind, dtype) pair for a parametrisation; the pairs not in `fast` run in the
+    slow tier (`make test-slow`): each pair compiles programs of its own."""
+    return [
+        pytest.param(kind, dtype, marks=() if (kind, dtype) in fast else pytest.mark.slow)
+        for kind in kinds
+        for dtype in (jnp.float64, jnp.float32)
+    ]
+
+
 def _check_gradients(grads, status, names, label):
     converged = status == Status.CONVERGED
     for name in names:
@@ -130,7 +139,7 @@ def _check_gradients(grads, status, names, label):
         assert np.all(np.isfinite(g[converged])), (label, name, g[converged])
 
 
-@pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
+@pytest.mark.parametrize("dtype", [jnp.float64, pytest.param(jnp.float32, marks=pytest.mark.slow)])
 @settings(max_examples=10, deadline=None, derandomize=True)
 @given(cases=BATCHES)
 def test_converged_or_flagged_never_nan_and_finite_gradients(cases, dtype):
@@ -214,8 +223,7 @@ def _any_terrain_solve(wheel, terrain, distribution, lateral, load, slip, beta):
     return out
 
 
-@pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
-@pytest.mark.parametrize("kind", ["wong", "bekker", "reece", "layered"])
+@pytest.mark.parametrize(("kind", "dtype"), _tiers({("bekker", jnp.float32)}))
 @settings(max_examples=4, deadline=None, derandomize=True)
 @given(cases=ANY_BATCHES)
 def test_every_terrain_converged_or_flagged_never_nan_and_finite_gradients(cases, kind, dtype):
@@ -285,8 +293,7 @@ def _tire_and_rut_solve(wheel, tires, terrain, distribution, load, slip, ruts):
     return out
 
 
-@pytest.mark.parametrize("dtype", [jnp.float64, jnp.float32])
-@pytest.mark.parametrize("kind", ["wong", "bekker", "reece", "layered"])
+@pytest.mark.parametrize(("kind", "dtype"), _tiers({("wong", jnp.float32)}))
 @settings(max_examples=2, deadline=None, derandomize=True, phases=NO_SHRINK)
 @given(cases=TIRE_BATCHES)
 def test_tyres_and_ruts_never_nan_and_a_stiff_tyre_is_the_rim(cases, kind, dtype):
@@ -387,7 +394,9 @@ def _wheel_power(terrain, distribution, speed, wheel_speed, load):
     return out
 
 
-@pytest.mark.parametrize("kind", list(TERRAINS))
+@pytest.mark.parametrize(
+    "kind", [pytest.param(k, marks=pytest.mark.slow if k != "wong" else ()) for k in TERRAINS]
+)
 @settings(max_examples=5, deadline=None, derandomize=True)
 @given(states=st.lists(SPEEDS, min_size=64, max_size=64))
 def test_snow_never_delivers_power_to_a_wheel(states, kind):
@@ -446,7 +455,7 @@ def _planar_power(terrain, u, v, r, omega, delta):
     return out
 
 
-@pytest.mark.parametrize("kind", ["wong", "layered"])
+@pytest.mark.parametrize("kind", ["wong", pytest.param("layered", marks=pytest.mark.slow)])
 @settings(max_examples=4, deadline=None, derandomize=True)
 @given(states=st.lists(st.tuples(*[UNIT] * 14), min_size=32, max_size=32))
 def test_snow_never_delivers_power_to_a_steered_wheel(states, kind):
@@ -503,18 +512,19 @@ def longitudinal_runs():
     speed = np.append(_speed(x[0:2]), [8.0, 0.0])
     spins = np.concatenate([spins / RADIUS, [[8.0 / RADIUS] * 4, [0.0] * 4]])
     torque = np.concatenate([np.zeros((6, 4)), [[-2000.0] * 4, [600.0] * 4]])
-    with optimised():  # its 160 implicit steps run longer than they compile
-        traj = _longitudinal(speed, spins, torque)
+    traj = _longitudinal(speed, spins, torque)
     assert np.all(np.asarray(traj.result == diffrax.RESULTS.successful))
     return traj
 
 
+@pytest.mark.slow  # a vmapped batch of 160 implicit steps
 def test_coasting_longitudinal_vehicle_never_gains_energy(longitudinal_runs):
     """Zero drive torque on the plate-rule snow: the kinetic energy never increases."""
     energy = _longitudinal_energy(longitudinal_runs)[:6]
     assert np.all(np.diff(energy, axis=1) <= 1e-9 * energy[:, :-1] + 1e-9)
 
 
+@pytest.mark.slow
 def test_braked_vehicle_slows_and_driven_vehicle_does_not_go_backwards(longitudinal_runs):
     """The reproductions (found on the layered snow; here the plate-rule snow, whose
     drawbar pull at slip 1 is negative too): -2000 N m per wheel from 8 m/s sped the
@@ -547,6 +557,7 @@ def _planar(u0, r0, omega0, delta):
     )
 
 
+@pytest.mark.slow  # a vmapped batch of planar runs
 def test_coasting_planar_vehicle_never_gains_energy():
     """Zero drive torque, constant steering, random speeds, yaw rates and wheel spins of
     every sign on the plate-rule snow: translational, yaw and spin energy never increase."""
@@ -638,6 +649,7 @@ def test_the_rover_environment_never_turns_nan_under_any_action(rover_rollout, a
     _check_rollout(obs, reward, done, qpos, np.float64)
 
 
+@pytest.mark.slow  # a float32 process compiling the rollout again
 def test_the_rover_environment_never_turns_nan_in_float32(tmp_path):
     """The same rollout in a float32 process, with fixed random actions (a third of
     their components NaN or +-inf)."""

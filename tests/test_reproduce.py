@@ -178,7 +178,7 @@ def test_quick_start_notebook(tmp_path):
     assert "status       CONVERGED" in text and "(autodiff)" in text
 
 
-@pytest.mark.slow  # a kernel and its own compiles (make test-all)
+@pytest.mark.slow  # a kernel and its own compiles (make test-slow)
 def test_sensitivity_study_notebook(tmp_path):
     nb = run_notebook("sensitivity_study.ipynb", tmp_path)
     assert "elasticity of drawbar_pull" in outputs_text(nb)

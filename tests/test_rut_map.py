@@ -57,6 +57,7 @@ def test_straight_track_agrees_with_multi_pass_at_any_angle_to_the_grid():
     assert float(passes.motion_resistance[1]) < 0.9 * float(passes.motion_resistance[0])
 
 
+@pytest.mark.slow  # two laps of a path (make test-slow)
 def test_a_wheel_driving_a_circle_meets_its_own_rut_on_the_second_lap():
     """One wheel, two laps of a 4 m circle in 200 steps, on two snows at once (vmap):
     lap 1 on virgin snow, lap 2 in its own rut, where it is `multi_pass`'s second pass
@@ -102,6 +103,7 @@ def _resistance(x):
 X = jnp.array([float(SNOW.p_w), 4000.0, K_0])
 
 
+@pytest.mark.slow  # gradients through the map (make test-slow)
 def test_gradients_through_the_map_match_central_differences():
     """Forward mode w.r.t. p_w, the front wheel's load and k_0 (each reaches the rear
     wheel only through the map) against central differences, 1e-6 relative (steps 1e-4

@@ -124,6 +124,7 @@ MASS = 4 * LOAD / 9.80665
 PLANAR = sj.PlanarVehicle(MASS, MASS * (2.5**2 + 1.5**2) / 12, 1.5, WHEEL, 2.5, 1.5)
 
 
+@pytest.mark.slow  # the planar forces on ruts (make test-slow)
 def test_planar_wheel_forces_put_the_rear_wheels_in_the_front_ruts():
     """The planar simulation's force function with `Ruts` at three states (one vmapped
     solve): driving straight at slips 0.2 / 0.1, the rear wheels are `multi_pass`'s
@@ -207,6 +208,7 @@ def test_planar_rear_wheels_follow_the_front_ruts_and_leave_them_in_a_turn():
     assert float(last.sinkage[1, 2]) < float(last.sinkage[2, 2])
 
 
+@pytest.mark.slow  # the rover's step on ruts (make test-slow)
 def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     """`snowjax.mjx`'s force function (what `step` calls after MJX's velocity stage) with
     `Ruts`, the shipped rover at 2 m/s with its wheels at slip 0.2: the rear wheels'

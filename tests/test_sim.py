@@ -277,7 +277,7 @@ def test_torque_below_the_self_propelled_torque_only_creeps(steady):
     assert 0 < float(traj.speed[-1]) < EPS
 
 
-# `make test-all` (19 s of a worker, two compiles of its own): `make test` starts vmapped
+# `make test-slow` (19 s of a worker, two compiles of its own): `make test` starts vmapped
 # batches from rest in `test_properties.py` (the coasting and driven vehicles) and
 # `test_planar.py` (the soft snow from rest), which the bug below broke too.
 @pytest.mark.slow
@@ -295,6 +295,7 @@ def test_vmap_over_terrains_from_rest():
         np.testing.assert_allclose(speeds[k], run(snow).speed, rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.slow  # a simulation with a failing step, compiled (make test-slow)
 def test_a_step_not_solved_even_when_retried_stops_the_integration():
     """With one iteration allowed, the steps from rest are not solved even at the step-size
     controller's smallest step: the root finder's failure is the result, and the rows
@@ -348,7 +349,7 @@ def test_bad_input_raises(kwargs, match):
 
 
 # 45 s of a worker on 2 cores, compiling the forward-mode Jacobians of the notebook's
-# least-squares fits in its kernel: `make test-all` runs it.
+# least-squares fits in its kernel: `make test-slow` runs it.
 @pytest.mark.slow
 def test_notebook_runs(tmp_path):
     nb = run_notebook("vehicle_simulation.ipynb", tmp_path)
@@ -396,6 +397,7 @@ def _solve_step(step, y0, solver, options=None, p_w=SNOW.p_w):
     )
 
 
+@pytest.mark.slow  # diffrax's own implicit solver compiled (make test-slow)
 def test_diffrax_implicit_euler_cannot_replace_the_warm_start_step():
     """`diffrax.ImplicitEuler` with optimistix's Newton, under the simulation's step-size
     controller, keeps a step whose root find failed: coasting from 3 m/s, where
@@ -427,6 +429,7 @@ def test_diffrax_implicit_euler_cannot_replace_the_warm_start_step():
     assert solver.init(term, ts[0], ts[1], COASTING, None) is None
 
 
+@pytest.mark.slow  # three root finders compiled in a simulation (make test-slow)
 def test_optimistix_root_finders_cannot_replace_the_damped_newton():
     """Why `_sim/levenberg_marquardt.py` exists (runs in `make test`, so that the reason
     cannot expire unseen): the first implicit step from rest under 545 N m per wheel (the

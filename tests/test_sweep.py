@@ -2,8 +2,8 @@
 
 Every sweep here uses chunks of 8 rows with the default solver options, so the jitted
 solve compiles once per process (the reference `solve_wheel` calls use the same shape
-and share it).  The 4-device sharded sweep (a subprocess) and the notebook (a thread)
-start with the module, so their compiles overlap the other tests.
+and share it).  The 4-device sharded sweep (a subprocess) starts with the module, so
+its compiles overlap the other tests.
 """
 
 from __future__ import annotations
@@ -16,7 +16,6 @@ import shutil
 import subprocess
 import sys
 import textwrap
-import threading
 
 import numpy as np
 import pytest
@@ -60,9 +59,7 @@ class _Background:
 
     def __init__(self, tmp_path_factory, names):
         self.sharded_out = tmp_path_factory.mktemp("sharded") / "sweep"
-        self.notebook_dir = tmp_path_factory.mktemp("notebook")
-        self.proc = self.thread = None
-        self.notebook = self.notebook_error = None
+        self.proc = None
         if "test_sharded_sweep_equals_single_device" in names:
             # The same sweep on 4 (virtual CPU) devices, in a fresh process.
             env = dict(
@@ -79,15 +76,6 @@ class _Background:
                 stderr=subprocess.STDOUT,
                 text=True,
             )
-        if "test_parameter_sweep_notebook" in names:
-            self.thread = threading.Thread(target=self._run_notebook, daemon=True)
-            self.thread.start()
-
-    def _run_notebook(self):
-        try:
-            self.notebook = run_notebook("parameter_sweep.ipynb", self.notebook_dir)
-        except BaseException as err:  # re-raised in the test
-            self.notebook_error = err
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -98,8 +86,6 @@ def background(request, tmp_path_factory):
     if work.proc is not None and work.proc.poll() is None:
         work.proc.kill()
         work.proc.wait()
-    if work.thread is not None:
-        work.thread.join(timeout=600)
 
 
 @pytest.fixture(scope="module")
@@ -379,6 +365,7 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
     _assert_rows_equal(sj.load_sweep(out), reference[1])
 
 
+@pytest.mark.slow  # worker processes, each compiling (make test-slow)
 def test_worker_processes_write_the_same_rows(reference, tmp_path):
     # Three local workers (this process and two pinned children) deal the 3 chunks.
     out = tmp_path / "w"
@@ -510,17 +497,14 @@ def test_cli_sweep_resumes_and_reports_bad_specs(reference, tmp_path, capsys):
         assert "Traceback" not in err
 
 
-def test_parameter_sweep_notebook(background):
-    """Runs `notebooks/parameter_sweep.ipynb` (small sizes), started in the background."""
-    background.thread.join(timeout=600)
-    assert not background.thread.is_alive(), "the notebook did not finish in 600 s"
-    if background.notebook_error is not None:
-        raise background.notebook_error
-    text = outputs_text(background.notebook)
+@pytest.mark.slow  # a kernel and its own compiles (make test-slow)
+def test_parameter_sweep_notebook(tmp_path):
+    """Runs `notebooks/parameter_sweep.ipynb` (small sizes)."""
+    text = outputs_text(run_notebook("parameter_sweep.ipynb", tmp_path))
     assert "computed_chunks=0" in text  # the rerun resumed instead of recomputing
     counts = dict(re.findall(r"^(\w+): (\d+) points$", text, flags=re.M))
     assert int(counts["CONVERGED"]) > 0 and sum(map(int, counts.values())) == 48, counts
-    assert (background.notebook_dir / "sweep-output" / "sweep.csv").exists()
+    assert (tmp_path / "sweep-output" / "sweep.csv").exists()
 
 
 def _free_port() -> int:
@@ -531,6 +515,7 @@ def _free_port() -> int:
         return s.getsockname()[1]
 
 
+@pytest.mark.slow  # two processes, each compiling (make test-slow)
 def test_distributed_sweep_whose_peer_dies_ends_in_one_line(tmp_path):
     """Two `--distributed` processes on this machine (loopback); process 1 dies (its whole
     process group is killed) once process 0 has written a chunk.  JAX's distributed
@@ -577,6 +562,7 @@ def test_distributed_sweep_whose_peer_dies_ends_in_one_line(tmp_path):
     assert "distributed service" in (out / ".sweep.process0.log").read_text()
 
 
+@pytest.mark.slow  # the tyre's sweep compiled (make test-slow)
 def test_a_deflecting_tire_sweeps_like_solve_wheel(tmp_path):
     """A `DeflectingTire` with two inflation pressures (one rigid mode, one elastic) and a
     flexing resistance: the rows equal `solve_wheel`, the varying leaf is a column named

@@ -103,6 +103,7 @@ def test_fit_names_and_transforms():
         sj.fit_wheel(**{**base, "distribution": sj.WongReece(0.9, 0.32)}, fit=("n",))
 
 
+@pytest.mark.slow  # a fit on the any-terrain rule (make test-slow)
 def test_fit_wheel_recovers_bekker_and_wong_reece_noise_free(synthetic):
     soil, dist = _start()
     res = sj.fit_wheel(WHEEL, soil, LOADS, SLIPS, fit=FITTED, distribution=dist, **synthetic)
@@ -118,6 +119,7 @@ def test_fit_wheel_recovers_bekker_and_wong_reece_noise_free(synthetic):
     assert res.sse < 1e-16 and (res.info["status"] == 0).all()
 
 
+@pytest.mark.slow  # a fit on the any-terrain rule (make test-slow)
 def test_fit_wheel_recovers_bekker_and_wong_reece_with_noise(synthetic):
     """1 % Gaussian noise (of each quantity's RMS), seed 0: within 5 % and 4 sigma."""
     rng = np.random.default_rng(0)
@@ -306,6 +308,7 @@ def test_wheel_forces_on_bekker_soil():
     np.testing.assert_allclose(f.longitudinal_force[5], -f.longitudinal_force[1], rtol=1e-12)
 
 
+@pytest.mark.slow  # a simulation on the any-terrain rule (make test-slow)
 def test_simulation_on_bekker_wong_reece_reaches_the_self_propelled_state():
     """Constant torque M_w(i*), i* the slip of zero drawbar pull (brentq on solve_wheel):
     the vehicle settles at i* with zero drawbar pull."""

@@ -198,7 +198,12 @@ def _strength(terrain, layer="top"):
 
 @pytest.mark.parametrize(
     "kind,wong_reece",
-    [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)],
+    [
+        pytest.param(k, wr, marks=pytest.mark.slow if (k, wr) == ("layered", False) else ())
+        for k in KINDS
+        for wr in (False, True)
+        if (k, wr) != ("wong", False)
+    ],
 )
 def test_equilibrium_matches_brentq(kind, wong_reece):
     terrain, points = EQUILIBRIUM_CASES[kind]
@@ -235,6 +240,7 @@ def test_equilibrium_matches_brentq(kind, wong_reece):
         assert float(st.torque[k]) == pytest.approx(m, rel=1e-7)
 
 
+@pytest.mark.slow  # batches over every law (make test-slow)
 def test_done_means_batched_loads_slips_parameter_sets():
     """The documented call, batched over parameter sets x loads x slips, for every terrain."""
     wheel = sj.RigidWheel(1.0, 0.4)
@@ -276,6 +282,7 @@ def _fd(fun, x, h):
     return (fun(x + h) - fun(x - h)) / (2 * h)
 
 
+@pytest.mark.slow  # a gradient per leaf (make test-slow)
 def test_gradients_wrt_k_phi_n_c1_match_central_differences():
     wheel = sj.RigidWheel(1.0, 0.4)
     soil = sj.BekkerSoil(1.1, 5e3, 800e3, 1e3, 0.6, shear_modulus=0.02)

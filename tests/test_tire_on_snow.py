@@ -157,6 +157,7 @@ def test_vmap_agrees_with_the_broadcast_call(grid):
         np.testing.assert_allclose(v, getattr(grid, name), rtol=1e-13, atol=1e-10)
 
 
+@pytest.mark.slow  # gradients through the coupled model (make test-slow)
 def test_gradient_matches_central_differences():
     x0 = np.array([5200.0, 0.23, 0.12])  # load [N], slip [-], slip angle [rad]
     steps = np.array([1e-1, 1e-5, 1e-6])

@@ -73,6 +73,7 @@ def _read(path):
         return list(csv.DictReader(f))
 
 
+@pytest.mark.slow  # `snowjax validate` end to end, about a minute (make test-slow)
 def test_cli_writes_the_report(run):
     for name in (
         "report.md",
@@ -87,6 +88,7 @@ def test_cli_writes_the_report(run):
     assert "skipped" not in report  # every model ran (including the Bekker wheel)
 
 
+@pytest.mark.slow
 def test_reported_metrics_match_the_predictions(run):
     """RMS, worst error and skill (1 - MSE / MSE of the baseline on the same held-out rows)
     recomputed from predictions.csv."""
@@ -123,6 +125,7 @@ def test_reported_metrics_match_the_predictions(run):
         assert float(m["skill"]) == pytest.approx(skill, rel=1e-4, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_no_fitted_quantity_is_called_a_prediction_and_every_fit_is_bounded(run):
     """A model is a prediction only if nothing was fitted on the rows; a calibration's
     every parameter has a range from a cited source, its choices in every fold lie
@@ -156,6 +159,7 @@ def test_no_fitted_quantity_is_called_a_prediction_and_every_fit_is_bounded(run)
     assert "fixed: rho_f = 500 kg/m^3 (CRREL 95-7" in report
 
 
+@pytest.mark.slow
 def test_tyre_rows_report_their_own_contribution(run):
     """Every tyre model names its rigid-rim counterpart, and the report gives tyre minus
     rim at the parameters chosen, recomputed here for the prediction."""
@@ -170,6 +174,7 @@ def test_tyre_rows_report_their_own_contribution(run):
     assert f"tyre − rim R/W at the parameters chosen: mean {np.mean(tyre - rim):.2g}" in report
 
 
+@pytest.mark.slow
 def test_uncalibrated_crrel_predictions_are_the_formula(run):
     preds = _read(run / "predictions.csv")
     for r in preds:
@@ -181,6 +186,7 @@ def test_uncalibrated_crrel_predictions_are_the_formula(run):
         assert float(r["coefficient_crrel"]) == pytest.approx(mu, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_worked_examples_reproduced(run):
     ex = _read(run / "crrel_95_1_examples.csv")
     for r in ex:

@@ -278,6 +278,7 @@ def _outputs(p, which):
     return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
 
 
+@pytest.mark.slow  # second derivatives, compiled (make test-slow)
 def test_second_derivatives_match_central_differences():
     """d/dp_w of the forward-mode slopes dtheta0/di and dM_w/di (what the MJX step's
     linearly implicit spin update differentiates) against central differences of them.
@@ -300,7 +301,7 @@ def test_second_derivatives_match_central_differences():
     np.testing.assert_allclose(second, fd, rtol=1e-5)
 
 
-@pytest.mark.parametrize("shear", ["classic", "simplified"])
+@pytest.mark.parametrize("shear", ["classic", pytest.param("simplified", marks=pytest.mark.slow)])
 def test_gradients_match_central_differences(shear):
     p0 = dict(
         p_w=float(FRESH.p_w),
@@ -480,6 +481,7 @@ def _robustness(n, seed):
     return st
 
 
+@pytest.mark.slow  # a random batch through every path (make test-slow)
 def test_robustness_random_batch():
     st = _robustness(1000, seed=7)
     assert np.sum(st.status == Status.BOTTOMED_OUT) > 10  # the range includes both outcomes
@@ -561,7 +563,7 @@ def test_braking_reaches_the_balance_it_checks():
     assert abs(float(st.sinkage) - 0.1844685477) <= 1e-10
 
 
-@pytest.mark.parametrize("shear", ["classic", "simplified"])
+@pytest.mark.parametrize("shear", ["classic", pytest.param("simplified", marks=pytest.mark.slow)])
 def test_braking_gradients_match_central_differences(shear):
     """Random in-range braking cases: forward-mode derivatives of the drawbar pull w.r.t.
     z_w, p_w, cohesion, tan phi and the load against central differences, scaled by the
