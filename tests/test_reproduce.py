@@ -1,9 +1,10 @@
 """`snowjax reproduce --small` end to end, the numbers behind its figures, and the notebooks.
 
 The reproduction runs once per session (module fixture) through the command line entry
-point.  The numbers it writes are checked against independent computations: the SciPy
-reference of the wheel (tests/reference.py), hand formulas of the load functions and the
-shear force model, and the NumPy normalised shear stress of tests/test_derivatives.py.
+point, in the slow tier (`make test-slow`: about two minutes of a worker).  The numbers it
+writes are checked against independent computations: the SciPy reference of the wheel
+(tests/reference.py), hand formulas of the load functions and the shear force model, and
+the NumPy normalised shear stress of tests/test_derivatives.py.
 """
 
 import contextlib
@@ -39,6 +40,7 @@ def _csv(path):
     return rows[0], rows[1:]
 
 
+@pytest.mark.slow  # the reproduction's run (make test-slow)
 def test_every_expected_file_appears(small_run):
     out, rc, stdout = small_run
     missing = [s.number for s in FIGURES if not (out / f"{s.stem}.png").exists()]
@@ -54,6 +56,7 @@ def test_every_expected_file_appears(small_run):
     assert "report.md" in stdout and "Report:" in stdout
 
 
+@pytest.mark.slow
 def test_report_shows_every_figure_with_caption_equations_table_and_comparison(small_run):
     out, _, _ = small_run
     report = (out / "report.md").read_text(encoding="utf-8")
@@ -69,6 +72,7 @@ def test_report_shows_every_figure_with_caption_equations_table_and_comparison(s
     assert "−U1² + 2U1 tan φ" in report  # the Table 4.6 sign error is reported
 
 
+@pytest.mark.slow
 def test_wheel_sweep_satisfies_equilibrium_by_independent_quadrature(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "wheel_sweep.csv")
@@ -106,6 +110,7 @@ def test_wheel_sweep_satisfies_equilibrium_by_independent_quadrature(small_run):
     ) == pytest.approx(53.6747, abs=2e-3)
 
 
+@pytest.mark.slow
 def test_load_function_tables_match_hand_formulas(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "fig_3_3.csv")
@@ -128,6 +133,7 @@ def _fx(load_kn, slip, c_s=None, mu=None, e1=None):
     return mu * f * (1 - math.exp(-phi - e1 * phi**2 - (e1**2 + 1 / 12) * phi**3))
 
 
+@pytest.mark.slow
 def test_variation_ratios_match_hand_computation(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "fig_3_6.csv")
@@ -146,6 +152,7 @@ def test_variation_ratios_match_hand_computation(small_run):
         assert float(r[3]) == pytest.approx((_fx(7.5, s, c1, m1, e2) - base) / total, rel=1e-9)
 
 
+@pytest.mark.slow
 def test_normalised_shear_of_fig_4_6_matches_numpy(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "fig_4_6.csv")
@@ -158,6 +165,7 @@ def test_normalised_shear_of_fig_4_6_matches_numpy(small_run):
         )
 
 
+@pytest.mark.slow
 def test_derivative_table_verdicts(small_run):
     out, _, _ = small_run
     header, rows = _csv(out / "derivative_tables.csv")
