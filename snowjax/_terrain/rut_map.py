@@ -115,9 +115,10 @@ class RutMap(eqx.Module):
         if not (x1 > x0 and y1 > y0 and all(map(math.isfinite, (x0, x1, y0, y1)))):
             raise ValueError(f"extent must be finite (x_min, x_max, y_min, y_max); got {extent}")
         dtype = jnp.result_type(float) if dtype is None else dtype
-        # Cell counts as Python floats first: an integer count of 10^19 cells would
-        # overflow XLA's shape arithmetic (a C++ abort, not a Python error).
-        cells = math.ceil((x1 - x0) / h) * math.ceil((y1 - y0) / h)
+        # Sizes checked in Python first: a count of 10^19 cells would overflow XLA's
+        # shape arithmetic (a C++ abort, not a Python error).
+        nx, ny = math.ceil((x1 - x0) / h), math.ceil((y1 - y0) / h)
+        cells = nx * ny
         window = math.ceil(reach / h) + 8
         itemsize = jnp.dtype(dtype).itemsize
         for what, count in (("the map", cells), (f"one mark's window ({window} x {window})",
@@ -129,7 +130,6 @@ class RutMap(eqx.Module):
                     f"{_size(max_bytes)}): use larger cells, a smaller extent or reach, or "
                     "raise max_bytes"
                 )
-        nx, ny = math.ceil((x1 - x0) / h), math.ceil((y1 - y0) / h)
         _check_modulus(k_0, a_u)
         return cls(jnp.zeros((nx, ny), dtype), k_0, a_u, (x0 + h / 2, y0 + h / 2), h, int(window))
 
@@ -248,8 +248,8 @@ class RutMap(eqx.Module):
 
 def _size(nbytes: float) -> str:
     """A byte count in the binary unit that reads best ("3.2 GiB")."""
-    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB", "PiB"):
-        if nbytes < 1024 or unit == "PiB":
+    for unit in ("bytes", "KiB", "MiB", "GiB", "TiB"):
+        if nbytes < 1024:
             return f"{nbytes:.3g} {unit}"
         nbytes /= 1024
     return f"{nbytes:.3g} PiB"
