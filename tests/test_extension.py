@@ -1,4 +1,5 @@
-"""A terrain law and a stress distribution defined outside the package, one class each.
+"""A terrain law, a stress distribution and a shear law defined outside the package, one
+class each.
 
 `HyperbolicSnow` (sigma = k z / (1 - z / h), a compressible layer of depth h on a hard
 base) and `LinearRear` (the contact continues behind the axle to theta_r = -a theta0, the
@@ -8,13 +9,17 @@ API only (`snowjax.AbstractTerrain`, `snowjax.AbstractStressDistribution`,
 against the independent SciPy reference of `tests/reference_terrain.py`), `jax.grad`
 (against central differences), `fit_wheel` and `sweep`, with no other edit anywhere:
 the recipe of the extending guide's "Adding a terrain law, a stress distribution or a shear
-law".  A shear law (`KondnerShear`) likewise, through both contact rules.
+law".  The shear law (`KondnerShear`, one method) likewise: on both contact rules, and,
+driving and braking, through `solve_wheel`, `jax.grad`, `fit_wheel`, `sweep`,
+`simulate_longitudinal`, `simulate_planar` and `snowjax.mjx.step`, against SciPy
+references (`tests/reference_terrain.py`, and `_wong_kondner` here for a slip angle).
 """
 
 from __future__ import annotations
 
+import json
 import math
-from typing import ClassVar
+import os
 
 import equinox as eqx
 import jax
@@ -298,30 +303,12 @@ class KondnerShear(sj.AbstractShearLaw):
     """Kondner's hyperbolic mobilisation, g = (j / K) / (1 + |j / K|): the shear stress
     rises like Janosi–Hanamoto's at small displacement and approaches the strength as
     1 / j instead of exponentially (Kondner 1963, "Hyperbolic stress-strain response:
-    cohesive soils", J. Soil Mech. Found. Div. 89(SM1):115-143)."""
-
-    name: ClassVar[str] = "kondner"
-    nodes_closed_form: ClassVar = (12, (12, 12, 12, 12))
-    nodes_any_terrain: ClassVar = (12, 16)
-
-    def check(self, terrain, distribution) -> None:
-        """Applies everywhere."""
+    cohesive soils", J. Soil Mech. Found. Div. 89(SM1):115-143).  One method: every
+    other part of a shear law has a default."""
 
     def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain):
         x = j / modulus
         return x / (1 + jnp.abs(x))
-
-    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
-        # The sign change is that of j, as for Janosi–Hanamoto.
-        return sj.JanosiHanamoto.braking_panels(
-            self, theta0, slip, diameter, terrain, z0_rel, entry_scale
-        )
-
-    def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel):
-        r = diameter / 2
-        x = r * (theta0 - (1 - slip) * jnp.sin(theta0)) / terrain.shear_modulus
-        # dg/dtheta = g'(x) dx/dtheta, dj/dtheta = -r i at theta = 0.
-        return x / (1 + jnp.abs(x)), -r * slip / terrain.shear_modulus / (1 + jnp.abs(x)) ** 2
 
 
 def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
@@ -351,3 +338,210 @@ def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
         )
         got = [forces.vertical_load[k], forces.motion_resistance[k], forces.thrust[k]]
         np.testing.assert_allclose(got, exp[:3], rtol=1e-7, atol=1e-7 * exp[0])
+
+
+# --------------------------------------------------------------------------------------
+# The one-method shear law through every workflow, against a SciPy reference written here
+# --------------------------------------------------------------------------------------
+
+
+def _kondner(u):
+    return u / (1 + abs(u))
+
+
+def _wong_kondner(theta0, slip, beta, snow, diameter, width):
+    """(W, R, T, M, F_y) [N, N m] of a rigid wheel on Wong snow's front region with
+    Kondner's law, by SciPy's adaptive quadrature: tau along the resultant of the shear
+    displacements (4.10) and j_y = r (1 - i)(theta0 - theta) tan(beta), K_y = K
+    (`Lateral()`), the contact panels cut where j_x changes sign and graded at the entry."""
+    from scipy import integrate, optimize
+
+    p_w, z_w, c, tan_phi, k = (float(x) for x in (snow.p_w, snow.z_w, snow.cohesion,
+                                                   snow.tan_phi, snow.shear_modulus))  # fmt: skip
+    r = diameter / 2
+
+    def sig(th):
+        return -p_w * math.log1p(-max(r * (math.cos(th) - math.cos(theta0)), 0.0) / z_w)
+
+    def j_x(th):
+        return r * ((theta0 - th) - (1 - slip) * (math.sin(theta0) - math.sin(th)))
+
+    def taus(th):
+        a, b = j_x(th) / k, r * (1 - slip) * (theta0 - th) * math.tan(beta) / k
+        u = math.hypot(a, b)
+        tau = (c + sig(th) * tan_phi) * _kondner(u)
+        return (tau * a / u, tau * b / u) if u > 0 else (0.0, 0.0)
+
+    pts = {0.0, theta0} | {theta0 - m * k / r for m in (1, 4, 16, 64) if m * k / r < theta0}
+    grid = np.linspace(0.0, theta0, 2001)
+    vals = [j_x(t) for t in grid]
+    for i in range(len(grid) - 2):  # the sign change of j_x inside the contact
+        if vals[i] * vals[i + 1] < 0:
+            pts.add(optimize.brentq(j_x, grid[i], grid[i + 1], xtol=1e-15))
+    pts = sorted(pts)
+    fns = [
+        lambda t: sig(t) * math.cos(t) + taus(t)[0] * math.sin(t),
+        lambda t: sig(t) * math.sin(t),
+        lambda t: taus(t)[0] * math.cos(t),
+        lambda t: taus(t)[0] * r,
+        lambda t: taus(t)[1],
+    ]
+    quad = (
+        lambda f: sum(  # noqa: E731
+            integrate.quad(f, lo, hi, epsabs=0.0, epsrel=1e-12, limit=400)[0]
+            for lo, hi in zip(pts[:-1], pts[1:])
+        )
+    )
+    return np.array([quad(f) * r * width for f in fns])
+
+
+def _check_against_reference(load, slip, beta, entry_angle, drawbar_pull, lateral_force, wheel):
+    """The recorded forces of wheels at (load, slip, slip angle) against the reference at
+    their entry angle: W = load (the equilibrium), T - R and F_y within 1e-6 of the load."""
+    diameter, width = float(wheel.diameter), float(wheel.width)
+    for k in range(len(load)):
+        w, r, t, _, fy = _wong_kondner(
+            float(entry_angle[k]), float(slip[k]), float(beta[k]), FRESH, diameter, width
+        )
+        scale = float(load[k])
+        assert w == pytest.approx(scale, rel=1e-6)
+        assert float(drawbar_pull[k]) == pytest.approx(t - r, abs=1e-6 * scale)
+        assert float(lateral_force[k]) == pytest.approx(fy, abs=1e-6 * scale)
+
+
+FRESH = sj.WongSnow.thesis_fresh_snow()
+KONDNER = KondnerShear()
+
+
+@pytest.mark.slow  # the simulations' own compiles (make test-slow)
+def test_the_one_method_shear_law_drives_and_brakes_in_both_simulations():
+    """`KondnerShear` (one method) in `simulate_longitudinal` and `simulate_planar`: the
+    wheels' recorded forces, driving and braking, equal the SciPy reference's at their
+    recorded slip, slip angle and entry angle."""
+    wheel = sj.RigidWheel.thesis_tire()
+    load = 3500.0
+    vehicle = sj.Vehicle(mass=2 * load / 9.80665, wheel_inertia=1.5, wheel=wheel, num_wheels=2)
+    torque = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -400.0]))
+    traj = sj.simulate_longitudinal(vehicle, FRESH, torque, 1.2, 0.05, initial_speed=2.0,
+                                    shear=KONDNER)  # fmt: skip
+    slips = np.asarray(traj.slip[:, 0])
+    rows = [int(np.argmax(slips)), int(np.argmin(slips))]
+    assert slips[rows[0]] > 0.05 and slips[rows[1]] < -0.05, slips  # driving and braking
+    assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
+    _check_against_reference(
+        np.full(2, load), slips[rows], np.zeros(2), np.asarray(traj.entry_angle[rows, 0]),
+        np.asarray(traj.drawbar_pull[rows, 0]), np.zeros(2), wheel,
+    )  # fmt: skip
+
+    planar = sj.PlanarVehicle(1400.0, 1400.0 * (2.5**2 + 1.5**2) / 12, 1.5, wheel, 2.5, 1.5)
+    drive = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -300.0]))
+    traj = sj.simulate_planar(planar, FRESH, 0.15, drive, 1.2, 0.05, initial_speed=2.0,
+                              shear=KONDNER)  # fmt: skip
+    assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
+    slips = np.asarray(traj.slip)
+    rows = np.array([np.argmax(slips[:, 0]), np.argmin(slips[:, 0])])
+    assert slips[rows[0], 0] > 0.05 and slips[rows[1], 0] < -0.05, slips[:, 0]
+    beta = np.asarray(traj.slip_angle)[rows]
+    assert np.all(np.abs(beta[:, :2]) > 1e-3), beta  # the steered wheels slide sideways
+    loads = np.asarray(planar.wheel_load)
+    for k in range(4):
+        _check_against_reference(
+            np.full(2, loads[k]), slips[rows, k], beta[:, k],
+            np.asarray(traj.entry_angle)[rows, k], np.asarray(traj.drawbar_pull)[rows, k],
+            np.asarray(traj.lateral_force)[rows, k], wheel,
+        )  # fmt: skip
+
+
+@pytest.mark.slow  # an MJX step's own compile (make test-slow)
+def test_the_one_method_shear_law_in_an_mjx_step():
+    """`KondnerShear` in `snowjax.mjx.step`: the shipped rover moving forwards and
+    sideways, front wheels driven and rear wheels braked; each wheel's forces equal the
+    SciPy reference's at its slip, slip angle and entry angle."""
+    try:
+        from mujoco import mjx
+
+        from snowjax import mjx as smjx
+    except ImportError:
+        if os.environ.get("CI", "").lower() == "true":
+            raise
+        pytest.skip("the snowjax[mjx] extra is not installed")
+    model, wheels = smjx.load_rover()
+    m = mjx.put_model(model)
+    d0 = mjx.make_data(m)
+    radius = float(wheels.wheel.diameter) / 2
+    spins = np.array([2.0 / (radius * 0.8), 2.0 / (radius * 0.8), 2.0 / (radius * 1.25),
+                      2.0 / (radius * 1.25)])  # fmt: skip
+    qvel = d0.qvel.at[0].set(2.0).at[1].set(0.4).at[np.asarray(wheels.dof_ids)].set(spins)
+    d = d0.replace(qvel=qvel)
+    _, f = jax.jit(lambda d: smjx.step(m, d, wheels, FRESH, shear=KONDNER))(d)
+    slip = np.asarray(f.slip)
+    assert np.all(slip[:2] > 0.05) and np.all(slip[2:] < -0.05), slip
+    assert np.all(np.abs(np.asarray(f.slip_angle)) > 1e-3)
+    assert np.all(np.asarray(f.status) == sj.Status.CONVERGED)
+    _check_against_reference(
+        np.asarray(f.load), slip, np.asarray(f.slip_angle), np.asarray(f.entry_angle),
+        np.asarray(f.longitudinal_force), np.asarray(f.lateral_force), wheels.wheel,
+    )  # fmt: skip
+
+
+def _hyperbolic(modulus=4e5):
+    return lambda z, b: modulus * max(z, 0.0) / (1 - max(z, 0.0) / 0.25)  # noqa: E731
+
+
+def _kondner_reference(k, modulus=4e5, shear_modulus=0.01):
+    """(theta0, sinkage, drawbar pull) of point k of (LOADS, SLIPS) on `HyperbolicSnow` with
+    Kondner's law, by SciPy (`reference_terrain`)."""
+    theta0, (_, r, t, _) = ref.solve(
+        LOADS[k], SLIPS[k], 0.736, 0.235, _hyperbolic(modulus), 2e3, 0.2, shear_modulus,
+        depth=0.25, mobilisation=_kondner,
+    )  # fmt: skip
+    return theta0, 0.368 * (1 - math.cos(theta0)), t - r
+
+
+@pytest.mark.slow  # a gradient's own compile (make test-slow)
+def test_gradients_of_the_one_method_shear_law_match_the_reference():
+    """d(drawbar pull)/d(K) and d/d(k) through `solve_wheel` with `KondnerShear`, driving
+    and braking, against central differences of the SciPy reference (relative step 1e-4:
+    truncation and the reference's rounding both below 1e-8 of the derivative)."""
+
+    def pull(snow):
+        return sj.solve_wheel(_full(WHEEL), snow, LOADS, SLIPS, KONDNER).drawbar_pull
+
+    grads = jax.jacrev(lambda s: pull(s))(_full(SNOW))
+    for field, value in (("shear_modulus", 0.01), ("modulus", 4e5)):
+        h = 1e-4 * value
+        for k in range(N):
+            up = _kondner_reference(k, **{field: value + h})[2]
+            down = _kondner_reference(k, **{field: value - h})[2]
+            expected = (up - down) / (2 * h)
+            got = float(getattr(grads, field)[k, k])
+            assert got == pytest.approx(expected, rel=1e-6, abs=1e-9 * LOADS[k] / value), field
+
+
+@pytest.mark.slow  # a fit's and a sweep's own compiles (make test-slow)
+def test_fit_wheel_and_sweep_take_the_one_method_shear_law(tmp_path):
+    """`fit_wheel` recovers k and K from SciPy-reference sinkages and drawbar pulls with
+    `KondnerShear` (driving and braking points), and `sweep`'s rows equal the reference
+    within 1e-6 of the load."""
+    reference = [_kondner_reference(k) for k in range(N)]
+    result = sj.fit_wheel(
+        WHEEL,
+        HyperbolicSnow(3e5, 0.25, 2e3, 0.2, 0.02),
+        LOADS,
+        SLIPS,
+        fit=("modulus", "shear_modulus"),
+        shear=KONDNER,
+        sinkage=np.array([x[1] for x in reference]),
+        drawbar_pull=np.array([x[2] for x in reference]),
+    )
+    assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
+    assert result.params["shear_modulus"] == pytest.approx(0.01, rel=1e-6)
+    assert "shear='KondnerShear'" in result.info["title"]
+    swept = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, shear=KONDNER, grid=False,
+                     out=tmp_path / "sweep", progress=False, formats=("npz",))  # fmt: skip
+    rows = dict(np.load(swept.files["npz"]))
+    manifest = json.loads((tmp_path / "sweep" / "manifest.json").read_text())
+    assert manifest["definition"]["shear"] == "KondnerShear"  # the law's name, recorded
+    for k, (_, sinkage, pull) in enumerate(reference):
+        assert rows["sinkage"][k] == pytest.approx(sinkage, rel=1e-6)
+        assert rows["drawbar_pull"][k] == pytest.approx(pull, abs=1e-6 * LOADS[k])

@@ -34,7 +34,7 @@ from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]
 
@@ -209,7 +209,7 @@ def tire_forces_on_snow(
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
     terrain, shear, distribution, *_ = _unpack_model(terrain, shear, distribution)
-    shear = _shear_name(shear)
+    shear = _shear_law(shear)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")
     if parameters is not None and not isinstance(parameters, TireParameters):

@@ -33,7 +33,6 @@ from .._leaves import (
 )
 from .._terrain.base import Terrain, _terrain_parameter_infos
 from .._terrain.wong import WongSnow
-from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import AbstractWheel
@@ -41,7 +40,7 @@ from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 from .core import (
     FitResult,
     NonFiniteModelError,
@@ -102,7 +101,7 @@ class _WheelResidual(eqx.Module):
 
     names: tuple = eqx.field(static=True)
     quantities: tuple = eqx.field(static=True)
-    shear: ShearModel = eqx.field(static=True)
+    shear: AbstractShearLaw = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     solve_max_steps: int = eqx.field(static=True)
     # (owner, field path) of each fitted variable; owner "terrain", "distribution",
@@ -559,7 +558,7 @@ def fit_wheel(
     snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
-    shear = _shear_name(shear)
+    shear = _shear_law(shear)
     if not isinstance(wheel, AbstractWheel):
         raise TypeError(
             "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
@@ -585,7 +584,7 @@ def fit_wheel(
         lateral = None
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
-    shear_model: ShearModel = shear
+    shear_model = shear
     _check_model(wheel, snow, distribution, shear_model)
 
     measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,
@@ -701,7 +700,7 @@ def fit_wheel(
         units=units,
         info={
             "title": f"Wheel calibration through the equilibrium (4.14): {m} points "
-            f"({q_txt}), shear={shear!r}{model_txt}",
+            f"({q_txt}), shear={shear.name!r}{model_txt}",
             "snow": fitted_snow,
             "terrain": fitted_snow,
             "distribution": fitted_dist,

@@ -89,7 +89,7 @@ from .._wheel.geometry import AbstractWheel
 from .._wheel.lateral import Lateral
 from .._wheel.model import _unpack_model
 from .._wheel.passes import _follower_overlap, _in_tracks
-from .._wheel.shear_law import _shear_law, _shear_name
+from .._wheel.shear_law import _shear_law
 from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
 
 __all__ = [
@@ -225,7 +225,7 @@ class SteeringProfile(eqx.Module):
 
 
 def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
-    """(terrain, shear name, distribution, lateral law, nodes per panel) of a steered
+    """(terrain, shear law, distribution, lateral law, nodes per panel) of a steered
     wheel's arguments (`simulate_planar`, `snowjax.mjx`): a `ContactModel` unpacked, the
     shear law checked to have a lateral counterpart, the lateral law defaulted to
     `Lateral()` and checked.  `who` names the caller in the errors."""
@@ -242,7 +242,7 @@ def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
         lateral = Lateral()
     elif not isinstance(lateral, Lateral):
         raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
-    return snow, _shear_name(law), distribution, lateral, nodes_per_panel
+    return snow, law, distribution, lateral, nodes_per_panel
 
 
 def _check_steering_profile(profile: SteeringProfile) -> None:

@@ -59,7 +59,7 @@ from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
 from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.passes import Ruts, _resolved
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 from .._wheel.status import Status
 from .levenberg_marquardt import _LevenbergMarquardt, _PassiveBlockSolver
 from .vehicle import (
@@ -444,7 +444,7 @@ def simulate_longitudinal(
     snow, shear, distribution, _, nodes_per_panel = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
-    shear = _shear_name(shear)
+    shear = _shear_law(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
     n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)

@@ -95,7 +95,7 @@ from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _validate_eagerly
 from .._wheel.model import ContactModel, _unpack_model
 from .._wheel.passes import _in_tracks
-from .._wheel.shear_law import AbstractShearLaw, _shear_law, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -350,7 +350,7 @@ def wheel_forces(
     snow, shear, distribution, _, nodes_per_panel = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
-    shear = _shear_name(shear)
+    shear = _shear_law(shear)
     _check_dynamic_shear(shear, "wheel_forces")
     _check_model(wheel, snow, distribution, shear)
     _check_parameters(wheel, snow, distribution, shear)

@@ -16,9 +16,9 @@ import numpy as np
 from .._constants import VERSION
 from .._leaves import _get_path, _module_leaves, _parameter_names, _with_leaves
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.geometry import AbstractWheel, RigidWheel
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 
 MANIFEST = "manifest.json"
 _FORMAT_TAG = "snowjax-sweep/1"
@@ -169,7 +169,7 @@ class _Definition:
     n_points: int
     shape: tuple[int, ...]  # grid: (parameter sets, loads, slips); list: (n,)
     chunk_size: int
-    shear: ShearModel
+    shear: AbstractShearLaw
     nodes_per_panel: int | None  # None: solve_wheel's default
     max_steps: int
     dtype: np.dtype
@@ -272,7 +272,7 @@ class _Definition:
             "n_points": self.n_points,
             "chunk_size": self.chunk_size,
             "n_chunks": self.n_chunks,
-            "shear": self.shear,
+            "shear": self.shear.name,
             "nodes_per_panel": self.nodes_per_panel,
             "max_steps": self.max_steps,
             "dtype": self.dtype.name,
@@ -307,6 +307,7 @@ def _define(
 
     from .._wheel.equilibrium import _check_model
 
+    shear = _shear_law(shear)
     if nodes_per_panel is not None and (
         isinstance(nodes_per_panel, bool) or int(nodes_per_panel) < 2
     ):
@@ -385,7 +386,11 @@ def _define(
     _check_parameter_sets(
         terrain_t,
         terrain_leaves,
-        lambda t, width: [*t.constraints(shear), *t.wheel_constraints(width)],
+        lambda t, width: [
+            *t.constraints(),
+            *t.wheel_constraints(width),
+            *shear.constraints(t),
+        ],
         "",
         "snow",
         widths=wheel_leaves["width"],

@@ -71,7 +71,7 @@ from .._terrain.base import Terrain
 from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.geometry import AbstractWheel
 from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_name
+from .._wheel.shear_law import AbstractShearLaw, _shear_law
 from .definition import (
     _FORMATS,
     _OUR_FILES,
@@ -433,7 +433,7 @@ def sweep(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
     try:
-        shear = _shear_name(shear)
+        shear = _shear_law(shear)
     except ValueError as err:
         raise ValueError(f"sweep: {err}") from None
     import jax

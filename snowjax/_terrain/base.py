@@ -157,7 +157,7 @@ class AbstractTerrain(eqx.Module):
         """
         return _bisect_pressure(self, pressure, width, 0.0, limit)
 
-    def constraints(self, shear: str = "classic") -> list[tuple[str, Array, Array, str]]:
+    def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range).
 
         Read from the `ParameterInfo` of every field (`snowjax.parameter`), nested

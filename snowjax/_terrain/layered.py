@@ -129,10 +129,10 @@ class LayeredSnow(AbstractTerrain):
         below_ice = self.bottom.pressure_at_clearance(jnp.where(after, clearance, self.depth))
         return jnp.where(after, below_ice, self.pressure(jnp.where(after, 0.0, sinkage), width))
 
-    def constraints(self, shear: str = "classic"):
+    def constraints(self):
         bottom_deeper = self.bottom.z_w > self.top.z_w
         return [
-            *AbstractTerrain.constraints(self, shear),
+            *AbstractTerrain.constraints(self),
             ("bottom.z_w", self.bottom.z_w, bottom_deeper, "> top.z_w (m)"),
         ]
 

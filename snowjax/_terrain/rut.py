@@ -205,12 +205,12 @@ class Rut(AbstractTerrain):
         """The reloading line rises, so the law rises where the virgin law does."""
         return self.virgin.pressure_rises()
 
-    def constraints(self, shear: str = "classic"):
-        own = [r for r in AbstractTerrain.constraints(self, shear) if "." not in r[0]]
+    def constraints(self):
+        own = [r for r in AbstractTerrain.constraints(self) if "." not in r[0]]
         shallower = self.rut_sinkage <= self.virgin.depth
         return [
             *own,
-            *((f"virgin.{name}", *rest) for name, *rest in self.virgin.constraints(shear)),
+            *((f"virgin.{name}", *rest) for name, *rest in self.virgin.constraints()),
             ("rut_sinkage", self.rut_sinkage, shallower, "<= the virgin base's depth (m)"),
         ]
 

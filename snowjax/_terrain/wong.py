@@ -23,8 +23,6 @@ from .base import (
     _clip_negative,
 )
 
-STRICT_COHESION = "> 0 Pa (the simplified model is normalised by c)"
-
 
 def wong_sinkage(
     pressure: Float[ArrayLike, "..."],
@@ -153,14 +151,6 @@ class WongSnow(AbstractTerrain):
         positive = z0_rel > 0
         xlogx = jnp.where(positive, z0_rel * jnp.log(jnp.where(positive, z0_rel, 1.0)), 0.0)
         return cos_integral, self.p_w / a * (1 - z0_rel + xlogx)
-
-    def constraints(self, shear: str = "classic"):
-        rules = AbstractTerrain.constraints(self, shear)
-        if shear != "simplified":
-            return rules
-        # The simplified model (4.13) is normalised by c.
-        strict = ("cohesion", self.cohesion, self.cohesion > 0, STRICT_COHESION)
-        return [strict if rule[0] == "cohesion" else rule for rule in rules]
 
     @classmethod
     def reference(cls) -> "WongSnow":

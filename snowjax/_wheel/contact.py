@@ -16,8 +16,8 @@ kink in the shear stress.  The integrals are therefore computed as
 
 1.  *singularity subtraction*: for every integrand f = sigma h + (smooth), the part
     `sigma (h(0) cos theta + h'(0) sin theta)` is integrated in closed form (the
-    terrain's `front_rim_integrals`; h(0), h'(0) from the shear law's
-    `axle_mobilisation`), which leaves a remainder that vanishes like theta^2 ln theta
+    terrain's `front_rim_integrals`; h(0), h'(0) from the shear law's `mobilisation`
+    at the axle, `_axle_mobilisation`), which leaves a remainder that vanishes like theta^2 ln theta
     at the singular end;
 2.  *graded composite Gauss–Legendre* on four panels split at the sign change of the
     shear displacement (or at theta0 / 2 when there is none; the shear law's
@@ -36,7 +36,7 @@ gradients are within 6e-7 relative for the simplified model (whose braking panel
 where |U0| saturates, see `ThesisSimplified.braking_panels`), and within 1.2e-4
 relative (d/dK; 1.3e-5 for d/dc, 9e-6 for d/dslip, below 1e-6 for the rest; worst of
 161 cases) for classic braking at its default nodes, where the panels are placed by the
-linear width of the shear layer (`JanosiHanamoto.braking_panels`).
+linear width of the shear layer (`AbstractShearLaw.braking_panels`).
 """
 
 from __future__ import annotations
@@ -258,6 +258,26 @@ class ContactForces(eqx.Module):
     torque: Float[Array, "..."]
 
 
+def _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance):
+    """(g [-], dg/dtheta [1/rad]) at theta = 0, for the closed-form rule's singularity
+    subtraction: the law's `mobilisation` and its derivative along the rim through the
+    shear displacement (4.10), dj/dtheta = -r i at the axle.  The normal stress is held
+    at its axle value, sigma(0) (dsigma/dtheta = 0 there by symmetry), taken 1e-30 z_w
+    above the base where the rim rests on it (finite for a law that diverges there)."""
+    if not law.mobilises:
+        zero = jnp.zeros_like(theta0)
+        return zero, zero
+    sigma0 = terrain.pressure_at_clearance(jnp.maximum(clearance, 1e-30 * terrain.depth), width)
+    modulus = terrain.shear_modulus
+
+    def along_rim(theta):
+        j = _shear_displacement(theta, theta0, slip, diameter / 2, jnp.sin(theta))
+        return law.mobilisation(j, modulus, sigma0, theta0, slip, diameter, terrain)
+
+    zero = jnp.zeros_like(theta0)
+    return jax.jvp(along_rim, (zero,), (jnp.ones_like(theta0),))
+
+
 def _closed_form_contact(
     theta0,
     slip,
@@ -310,7 +330,7 @@ def _closed_form_contact(
     # sin theta or tan phi g (cos theta); remove sigma (h(0) cos + h'(0) sin), whose
     # integral is known in closed form, leaving a remainder that vanishes like
     # theta^2 ln theta at the singular end.
-    g0, g1 = law.axle_mobilisation(theta0, slip, diameter, terrain, z0_rel)
+    g0, g1 = _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance)
     tp = terrain.tan_phi
     # Blend weight: 1 near bottoming (where it is needed), ~4 (z0/z_w)^2 for shallow
     # sinkage, where the closed forms lose digits to cancellation.

@@ -493,7 +493,7 @@ def _solve_jit(
     trees = (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
     shape, dtype, trees = _broadcast_leaves(*trees)
     wheel, terrain, distribution, load, slip, guess, slip_angle, lateral = trees
-    valid = _valid_mask(wheel, terrain, distribution, load, slip, shear.name)
+    valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
     small, large = _magnitude_window(dtype)
     for name, value, ok, _ in _side_rules(slip_angle, lateral):
         valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
@@ -695,7 +695,7 @@ def solve_wheel(
         return WheelState(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
-    _validate_eagerly(wheel, terrain, distribution, load, slip, shear.name)
+    _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
     if slip_angle is not None:
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731

@@ -423,12 +423,8 @@ def general_contact(
     shortening, cos_n, sin_n, element, arm_tau, arm_sigma = 0.0, cos, sin, None, None, None
     if tread is not None:
         shortening, cos_n, sin_n, element, arm_tau, arm_sigma = _tread_terms(theta, sin, cos, tread)
-    tau_y = None
-    if not law.mobilises:
-        tau = jnp.zeros_like(sigma)
-        if side is not None:
-            tau_y = jnp.zeros_like(sigma)
-    else:
+    tau = tau_y = jnp.zeros_like(sigma)  # no shear stress (`NoShear`)
+    if law.mobilises:
         j = _shear_displacement(theta, theta0, slip, r, sin)
         if tread is not None:
             j = j - r * shortening  # the tread's travel less the ground's, (1 - i) x
@@ -440,7 +436,9 @@ def general_contact(
             if tread is not None:
                 j_y = j_y - r * (1 - slip) * shortening * tan_beta
             k_y = modulus if k_lateral is None else k_lateral
-            share_x, share_y = law.combined_mobilisation(j / modulus, j_y / k_y)
+            share_x, share_y = law.combined_mobilisation(
+                j / modulus, j_y / k_y, sigma, theta0, slip, diameter, terrain
+            )
             tau, tau_y = strength * share_x, strength * share_y
 
     rb = r * width

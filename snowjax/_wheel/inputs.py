@@ -32,11 +32,12 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
     # every eager call.
     rules = _argument_rules(load, slip) + type(wheel).constraints(wheel)
-    kind = type(terrain)
+    kind, law = type(terrain), _shear_law(shear)
     rules += [
         (f"{terrain.label}.{name}", value, ok, allowed)
-        for name, value, ok, allowed in kind.constraints(terrain, shear)
+        for name, value, ok, allowed in kind.constraints(terrain)
         + kind.wheel_constraints(terrain, wheel.width)
+        + type(law).constraints(law, terrain)
     ]
     return rules + _distribution_rules(distribution, slip)
 
@@ -53,11 +54,12 @@ def _argument_rules(load, slip):
     ]
 
 
-# Wheels and terrains already checked: (id(wheel), id(terrain), shear) -> (weak references
-# to both, their leaves' (type, dtype, weak type) key).  Parameter sets are immutable
-# and usually reused across calls (a simulation, a sweep), so at batch 1 this halves the
-# cost of the eager checks.  Weak references make a reused id of a dead object a miss.
-_CHECKED: dict[tuple[int, int, str], tuple] = {}
+# Wheels and terrains already checked: (id(wheel), id(terrain), type of the shear law) ->
+# (weak references to both, their leaves' (type, dtype, weak type) key).  Parameter sets
+# are immutable and usually reused across calls (a simulation, a sweep), so at batch 1
+# this halves the cost of the eager checks.  Weak references make a reused id of a dead
+# object a miss.
+_CHECKED: dict[tuple[int, int, type], tuple] = {}
 
 
 def _leaf_key(leaves) -> tuple:
@@ -68,7 +70,7 @@ def _leaf_key(leaves) -> tuple:
 
 def _checked_parameters(wheel, terrain, shear):
     """The leaf key of an already-validated (wheel, terrain) pair, else None."""
-    entry = _CHECKED.get((id(wheel), id(terrain), shear))
+    entry = _CHECKED.get((id(wheel), id(terrain), type(_shear_law(shear))))
     if entry is None:
         return None
     (wheel_ref, terrain_ref), key = entry
@@ -81,7 +83,7 @@ def _remember_checked(wheel, terrain, shear, key) -> None:
         return  # NumPy leaves are mutable: check them every time
     if len(_CHECKED) >= 256:
         _CHECKED.clear()
-    _CHECKED[(id(wheel), id(terrain), shear)] = (
+    _CHECKED[(id(wheel), id(terrain), type(_shear_law(shear)))] = (
         (weakref.ref(wheel), weakref.ref(terrain)),
         key,
     )

@@ -2,24 +2,25 @@
 
 Every function with a `shear` argument takes one of these modules or its name:
 `JanosiHanamoto()` (`"classic"`, eq. 4.11), `ThesisSimplified()` (`"simplified"`,
-eq. 4.13) or `NoShear()` (`"none"`).  A shear law says what it needs of the terrain and
-the stress distribution (`check`): the thesis's simplified law is derived from Wong's
-pressure–sinkage law on the front region of the contact.  With a slip angle the classic
-law becomes the combined (lateral and longitudinal) law of `Lateral`.
-
-The contact quadrature asks the law for everything that depends on it: the
-mobilisation factor g in tau = (c + sigma tan phi) g (`mobilisation`,
-`combined_mobilisation`), the width of the layer behind the entry over which it rises
-(`entry_layer`), where a braked wheel's shear stress changes sign (`braking_panels`),
-g and dg/dtheta at the axle (`axle_mobilisation`, for the closed-form rule's
-singularity subtraction) and its default numbers of nodes (`nodes`).  `name` is the
-law's spelling as a string: what `sweep` records and the command line spells.
+eq. 4.13) or `NoShear()` (`"none"`), or a law written outside the package.  A law is
+one method, `mobilisation`: the factor g in tau = (c + sigma tan phi) g.  Everything
+else the quadrature needs has a default built from it or from the rim's geometry: the
+combined law under a slip angle (the resultant of the displacements, `Lateral`), the
+width of the layer behind the entry over which g rises (`entry_layer`), where a braked
+wheel's shear stress changes sign (`braking_panels`: where the shear displacement 4.10
+does), g and dg/dtheta at the axle (taken by the closed-form rule from `mobilisation`
+itself), the default numbers of nodes, and the name a sweep records (the class name).
+A law overrides a default only where its physics differs: the thesis's simplified law
+(derived from Wong's pressure–sinkage law on the front region) says what it needs of the
+terrain (`check`, `constraints`), where its stress changes sign, and that it has no
+lateral counterpart.
 """
 
 import abc
-from typing import ClassVar, Literal, cast
+from typing import ClassVar, Literal
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array
 
@@ -27,12 +28,15 @@ from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
 from .distribution import _is_front
 from .general import _layer_width, _shear_sign_change
-from .geometry import _shear_displacement_slope, _sincos_half, shear_displacement
+from .geometry import _shear_displacement_slope, _sincos_half
 from .lateral import combined_mobilisation
 
 __all__ = ["AbstractShearLaw", "JanosiHanamoto", "ThesisSimplified", "NoShear"]
 
 ShearModel = Literal["classic", "simplified", "none"]
+
+
+STRICT_COHESION = "> 0 Pa (the simplified model is normalised by c)"
 
 
 def _axle_gap(dtype) -> float:
@@ -46,14 +50,15 @@ def _axle_gap(dtype) -> float:
 
 class AbstractShearLaw(eqx.Module):
     """A shear law of the rim (abstract): tau = (c + sigma tan phi) g, the law giving the
-    mobilisation factor g.
+    mobilisation factor g [-].
 
-    A law implements `check`, `mobilisation` and `braking_panels`, and sets `name` and
-    `nodes_closed_form` / `nodes_any_terrain` (Gauss–Legendre nodes per panel of the
-    two contact rules, see `nodes`).  Angles in rad from the vertical through the wheel
-    centre (theta0 the entry angle), slip the driving slip i [-] (2.6), lengths in m.
+    A law implements one method, `mobilisation`; every other method and class variable
+    has a default (see the module's docstring) that a law overrides only where its physics
+    differs.  Angles in rad from the vertical through the wheel centre (theta0 the entry
+    angle), slip the driving slip i [-] (2.6), lengths in m, stresses in Pa.
     """
 
+    #: The law's name: what `sweep` records (default: the class name).
     name: ClassVar[str]
     #: Whether the law has a shear stress at all (`NoShear`: no).
     mobilises: ClassVar[bool] = True
@@ -66,26 +71,52 @@ class AbstractShearLaw(eqx.Module):
     #: its two-panel rule (no element brakes) and of each panel of its four-panel rule,
     #: chosen so that every contact integral stays within 1e-7 of adaptive quadrature
     #: over the documented range (tests; measured worst cases: classic 4e-8 driving and
-    #: 9e-8 braking, simplified 3e-9 driving, none 4e-10).
-    nodes_closed_form: ClassVar[tuple[int, tuple[int, int, int, int]]]
-    #: Default nodes per half-panel of the any-terrain rule (without, with braking).
-    nodes_any_terrain: ClassVar[tuple[int, int] | None] = None
+    #: 9e-8 braking, simplified 3e-9 driving, none 4e-10).  The default is the classic
+    #: law's, whose entry panel needs only 8 nodes.
+    nodes_closed_form: ClassVar[tuple[int, tuple[int, int, int, int]]] = (10, (10, 10, 10, 8))
+    #: Default nodes per half-panel of the any-terrain rule (without, with braking); None:
+    #: the law has no any-terrain rule.
+    nodes_any_terrain: ClassVar[tuple[int, int] | None] = (12, 16)
 
-    @abc.abstractmethod
-    def check(self, terrain, distribution) -> None:
-        """Raise `ValueError` if the law does not apply to this terrain and distribution
-        (`distribution` is None or `FrontRegion()` for the front region)."""
+    def __init_subclass__(cls, **kwargs):
+        super().__init_subclass__(**kwargs)
+        if "name" not in cls.__dict__:
+            cls.name = cls.__name__
 
     @abc.abstractmethod
     def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain) -> Array:
         """The factor g [-] at rim points with shear displacement j [m] (4.10), shear
         modulus K [m] and normal stress sigma [Pa], of a wheel of diameter D [m] at
-        entry angle theta0 and slip i on `terrain`."""
+        entry angle theta0 and slip i on `terrain`.  An odd function of j for a law of
+        the displacement (a braked wheel's stress points backwards where j < 0)."""
 
-    def combined_mobilisation(self, x, y) -> tuple[Array, Array]:
+    def check(self, terrain, distribution) -> None:
+        """Raise `ValueError` if the law does not apply to this terrain and distribution
+        (`distribution` is None or `FrontRegion()` for the front region); default: it
+        applies everywhere."""
+
+    def constraints(self, terrain) -> list[tuple[str, Array, Array, str]]:
+        """Rules the law adds to the terrain's parameters: (field, value, ok mask,
+        allowed range), e.g. a strictly positive cohesion for a law normalised by c;
+        default: none."""
+        return []
+
+    def combined_mobilisation(self, x, y, sigma, theta0, slip, diameter, terrain):
         """(g_x, g_y) [-] under a slip angle, for modulus-scaled displacements x = j / K
-        and y = j_y / K_y (`Lateral`)."""
-        raise ValueError(f"the shear law {type(self).__name__} has no lateral counterpart")
+        and y = j_y / K_y (`Lateral`): the law taken along the resultant displacement
+        u = hypot(x, y), `(x, y) g(u) / u` (g(u) / u -> g'(0) at u = 0)."""
+
+        def along(u):
+            one = jnp.ones_like(u)
+            return self.mobilisation(u, one, sigma, theta0, slip, diameter, terrain)
+
+        q = x * x + y * y
+        positive = q > 0
+        u = jnp.sqrt(jnp.where(positive, q, 1.0))
+        zero = jnp.zeros_like(u)
+        slope = jax.jvp(along, (zero,), (jnp.ones_like(u),))[1]
+        factor = jnp.where(positive, along(u) / u, slope)
+        return x * factor, y * factor
 
     def entry_layer(self, theta0, slip, diameter, terrain, modulus) -> Array:
         """Width [rad] of the layer behind the entry angle over which g rises (the linear
@@ -93,18 +124,37 @@ class AbstractShearLaw(eqx.Module):
         slope = _shear_displacement_slope(jnp.cos(theta0), slip)
         return _layer_width(modulus, diameter / 2, slope)
 
-    @abc.abstractmethod
     def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
         """Panels of the closed-form rule's four-panel layout: (b1, split, b3, scale2,
         scale3, scale4), the panels [0, b1], [b1, split], [split, b3], [b3, theta0] and
         the sinh scales [rad] of the last three (`z0_rel` = 1 - z0 / depth, the relative
-        distance of the lowest rim point to the base)."""
+        distance of the lowest rim point to the base).
 
-    def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel) -> tuple[Array, Array]:
-        """(g [-], dg/dtheta [1/rad]) at theta = 0, used by the closed-form rule's
-        singularity subtraction (default: no shear stress, (0, 0))."""
-        zero = jnp.zeros_like(theta0)
-        return zero, zero
+        Default: the sign change of the shear displacement, the sign change of g for a
+        law of j.  j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta),
+        k = 1 - i, vanishes at the entry; for a braked wheel with k cos theta0 > 1 it
+        rises from the entry to a maximum at theta* = arccos(1 / k) and, if j(0) < 0,
+        falls through zero at the split below theta* (backward shear near the axle, a
+        kink in the stress).  Panels: [0, split / 2] (quadratic map at the axle),
+        [split / 2, split] and [split, b3] clustered at the split with the linear layer
+        width K / (r |dj/dtheta|), and [b3, theta0] clustered at the entry with twice the
+        entry layer width.  b3 is theta*, kept within the middle 60 % of [split,
+        theta0]: each of the last two panels then holds one monotone branch of j.
+        Without a sign change the split is theta0 / 2 and b3 the midpoint of [split,
+        theta0]."""
+        th, has_root, theta_star = _shear_sign_change(theta0, None, slip, 8, True)
+        slope = _shear_displacement_slope(1 - 2 * _sincos_half(th)[0] ** 2, slip)
+        split_scale = _layer_width(terrain.shear_modulus, diameter / 2, slope)
+        has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
+        split = jnp.where(has_root, th, theta0 / 2)
+        gap = theta0 - split
+        b3 = jnp.where(
+            has_root,
+            jnp.clip(theta_star, split + 0.2 * gap, theta0 - 0.2 * gap),
+            split + 0.5 * gap,
+        )
+        scale = jnp.where(has_root, split_scale, jnp.inf)
+        return split / 2, split, b3, scale, scale, 2 * entry_scale
 
     def nodes(self, nodes_per_panel: int | None, closed_form: bool) -> tuple:
         """Nodes of the rule (without braking, with braking), indexed by `braking`.
@@ -130,54 +180,15 @@ class JanosiHanamoto(AbstractShearLaw):
     Every terrain and distribution; with a slip angle, the combined law of `Lateral`."""
 
     name: ClassVar[str] = "classic"
-    # Measured worst cases against adaptive quadrature: 4e-8 (driving) / 9e-8 (braking)
-    # on the closed-form rule, whose entry panel needs only 8 nodes; see the README for
-    # the any-terrain rule.
-    nodes_closed_form: ClassVar = (10, (10, 10, 10, 8))
-    nodes_any_terrain: ClassVar = (12, 16)
-
-    def check(self, terrain, distribution) -> None:
-        """Applies everywhere."""
 
     def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain):
         """`sign(j) (1 - exp(-|j| / K))` (4.11, mirrored for j < 0)."""
         return _signed_mobilisation(j / modulus)
 
-    def combined_mobilisation(self, x, y):
-        """The resultant law of `Lateral` (`combined_mobilisation`)."""
+    def combined_mobilisation(self, x, y, sigma, theta0, slip, diameter, terrain):
+        """The resultant law of `Lateral` (`combined_mobilisation`): the default's, in
+        closed form."""
         return combined_mobilisation(x, y)
-
-    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
-        """The shear displacement j(theta) / r = (theta0 - theta) - k (sin theta0 - sin
-        theta), k = 1 - i, vanishes at the entry; for a braked wheel with k cos theta0 > 1
-        it rises from the entry to a maximum at theta* = arccos(1 / k) and, if j(0) < 0,
-        falls through zero at the split below theta* (backward shear near the axle, a
-        kink in the stress).  Panels: [0, split / 2] (quadratic map at the axle),
-        [split / 2, split] and [split, b3] clustered at the split with the linear layer
-        width K / (r |dj/dtheta|), and [b3, theta0] clustered at the entry with twice the
-        entry layer width.  b3 is theta*, kept within the middle 60 % of [split,
-        theta0]: each of the last two panels then holds one monotone branch of j.
-        Without a sign change the split is theta0 / 2 and b3 the midpoint of [split,
-        theta0]."""
-        th, has_root, theta_star = _shear_sign_change(theta0, None, slip, 8, True)
-        slope = _shear_displacement_slope(1 - 2 * _sincos_half(th)[0] ** 2, slip)
-        split_scale = _layer_width(terrain.shear_modulus, diameter / 2, slope)
-        has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
-        split = jnp.where(has_root, th, theta0 / 2)
-        gap = theta0 - split
-        b3 = jnp.where(
-            has_root,
-            jnp.clip(theta_star, split + 0.2 * gap, theta0 - 0.2 * gap),
-            split + 0.5 * gap,
-        )
-        scale = jnp.where(has_root, split_scale, jnp.inf)
-        return split / 2, split, b3, scale, scale, 2 * entry_scale
-
-    def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel):
-        """g(0) and dg/dtheta(0) = exp(-|j| / K) (dj/dtheta) / K, dj/dtheta = -r i."""
-        x = shear_displacement(0.0, theta0, slip, diameter) / terrain.shear_modulus
-        dj_dtheta = -diameter / 2 * slip
-        return _signed_mobilisation(x), jnp.exp(-jnp.abs(x)) * dj_dtheta / terrain.shear_modulus
 
 
 # Level of |U0| beyond which the mobilisation is saturated to rounding: exp(-40) = 4e-18.
@@ -218,6 +229,7 @@ class ThesisSimplified(AbstractShearLaw):
     name: ClassVar[str] = "simplified"
     lateral: ClassVar[bool] = False
     in_simulations: ClassVar[bool] = False
+    nodes_any_terrain: ClassVar = None
     # The cubic exponent makes its shear layer steeper than the classic law's: more
     # nodes (measured worst case 3e-9 driving against adaptive quadrature).
     nodes_closed_form: ClassVar = (24, (16, 16, 16, 16))
@@ -230,6 +242,10 @@ class ThesisSimplified(AbstractShearLaw):
                 "of the contact: it needs a WongSnow terrain and distribution=None; use "
                 "shear='classic' for other terrains and for the Wong–Reece distribution."
             )
+
+    def constraints(self, terrain):
+        """The law is normalised by c: a strictly positive cohesion."""
+        return [("cohesion", terrain.cohesion, terrain.cohesion > 0, STRICT_COHESION)]
 
     def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain):
         """`sign(U0) (1 - exp(-|U0|))` (4.13); j and K unused."""
@@ -318,14 +334,6 @@ class ThesisSimplified(AbstractShearLaw):
         scale4 = jnp.where(has_root, entry_scale, jnp.minimum(theta0 - th_1, entry_scale))
         return b1, split, b3, scale2, scale3, scale4
 
-    def axle_mobilisation(self, theta0, slip, diameter, terrain, z0_rel):
-        """g(0); dg/dtheta(0) = 0 (g depends on theta only through sigma, and
-        dsigma/dtheta = 0 at theta = 0)."""
-        sigma0 = -terrain.p_w * jnp.log(jnp.maximum(z0_rel, 1e-30))
-        tau1, tau2 = _simplified_coefficients(theta0, diameter, terrain)
-        g0 = _signed_mobilisation(_simplified_exponent(sigma0 / terrain.cohesion, slip, tau1, tau2))
-        return g0, jnp.zeros_like(theta0)
-
 
 class NoShear(AbstractShearLaw):
     """No shear stress (`"none"`): the normal stress alone (motion resistance and sinkage)."""
@@ -335,14 +343,11 @@ class NoShear(AbstractShearLaw):
     nodes_closed_form: ClassVar = (8, (8, 8, 8, 8))
     nodes_any_terrain: ClassVar = (12, 12)
 
-    def check(self, terrain, distribution) -> None:
-        """Applies everywhere."""
-
     def mobilisation(self, j, modulus, sigma, theta0, slip, diameter, terrain):
         """0."""
         return jnp.zeros_like(sigma)
 
-    def combined_mobilisation(self, x, y):
+    def combined_mobilisation(self, x, y, sigma, theta0, slip, diameter, terrain):
         """(0, 0)."""
         return jnp.zeros_like(x), jnp.zeros_like(x)
 
@@ -371,8 +376,3 @@ def _shear_law(shear) -> AbstractShearLaw:
         f"shear must be one of {tuple(SHEAR_LAWS)} or a snowjax shear law "
         f"(JanosiHanamoto(), ThesisSimplified(), NoShear()), got {shear!r}"
     )
-
-
-def _shear_name(shear) -> ShearModel:
-    """The name of a shear law given as a module or a name (checked)."""
-    return cast(ShearModel, _shear_law(shear).name)
