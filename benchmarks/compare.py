@@ -13,10 +13,11 @@ tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the
 in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and the cost of
 one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200 steps of
 10 ms); the first call of a fresh process (compile, batch 1); and the general quadrature:
-Bekker's Snow (U.S.) with Wong–Reece and the layered snow on the front region, batches 1
-and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  The table is printed (`--out FILE`: also
-written there): it compares revisions, so it belongs in a commit message or the CHANGELOG,
-not on the documentation's pages.
+Bekker's Snow (U.S.) with Wong–Reece, the layered snow on the front region, the rim on
+Wong snow at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong snow and on
+Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips -0.3 to 0.9).
+The table is printed (`--out FILE`: also written there): it compares revisions, so it
+belongs in a commit message or the CHANGELOG, not on the documentation's pages.
 """
 
 from __future__ import annotations
@@ -89,17 +90,25 @@ def measure() -> dict[str, float]:
     out["simulate_longitudinal, per wheel-step"] = best(
         lambda: jax.block_until_ready(sim()), 10
     ) / (200 * 4)
-    # Other terrains and the Wong–Reece distribution (the general quadrature).
+    # Other terrains, the Wong–Reece distribution, a slip angle and a deflecting tyre (the
+    # general quadrature).
+    tire = sj.DeflectingTire(wheel.diameter, wheel.width, 0.176, 100e3, 0.0)
+    bekker, rear = sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32)
     others = {
-        "Bekker snow (U.S.), Wong–Reece": (sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32)),
-        "layered snow, front region": (sj.LayeredSnow.ice_layer_example(), None),
+        "Bekker snow (U.S.), Wong–Reece": (wheel, bekker, rear, None),
+        "layered snow, front region": (wheel, sj.LayeredSnow.ice_layer_example(), None, None),
+        "slip angle 0.1 rad": (wheel, snow, None, 0.1),
+        "deflecting tyre (100 kPa)": (tire, snow, None, None),
+        "deflecting tyre, Bekker snow (U.S.), Wong–Reece": (tire, bekker, rear, None),
     }
-    for label, (terrain, dist) in others.items():
+    for label, (this_wheel, terrain, dist, angle) in others.items():
         for n in (1, 1_000):
             load, slip = rng.uniform(300.0, 900.0, n), rng.uniform(-0.3, 0.9, n)
 
-            def run(terrain=terrain, load=load, slip=slip, dist=dist):
-                st = sj.solve_wheel(wheel, terrain, load, slip, distribution=dist)
+            def run(this_wheel=this_wheel, terrain=terrain, load=load, slip=slip, dist=dist,
+                    angle=angle):  # fmt: skip
+                st = sj.solve_wheel(this_wheel, terrain, load, slip, distribution=dist,
+                                    slip_angle=angle)  # fmt: skip
                 st.entry_angle.block_until_ready()
 
             out[f"{label}, batch {n:,}"] = best(run, 30 if n == 1 else 10)

@@ -14,6 +14,9 @@ from ._terrain.rut_map import RutMap as RutMap
 from ._terrain.reece import ReeceSoil as ReeceSoil
 from ._wheel.geometry import RigidWheel as RigidWheel
 from ._wheel.geometry import AbstractWheel as AbstractWheel
+from ._wheel.geometry import AbstractContact as AbstractContact
+from ._wheel.geometry import ContactPoints as ContactPoints
+from ._wheel.geometry import RimContact as RimContact
 from ._wheel.tire import DeflectingTire as DeflectingTire
 from ._leaves import ParameterInfo as ParameterInfo
 from ._leaves import as_float as as_float

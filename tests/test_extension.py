@@ -8,8 +8,8 @@ API only (`snowjax.AbstractTerrain`, `snowjax.AbstractStressDistribution`,
 `snowjax.parameter`, `snowjax.as_float`), and then run through `solve_wheel` (checked
 against the independent SciPy reference of `tests/reference_terrain.py`), `jax.grad`
 (against central differences), `fit_wheel` and `sweep`, with no other edit anywhere:
-the recipe of the extending guide's "Adding a terrain law, a stress distribution or a shear
-law".  The shear law (`KondnerShear`, one method) likewise: on both contact rules, and,
+the recipe of the extending guide's "Adding a terrain law, a stress distribution, a shear
+law or a wheel".  The shear law (`KondnerShear`, one method) likewise: on both contact rules, and,
 driving and braking, through `solve_wheel`, `jax.grad`, `fit_wheel`, `sweep`,
 `simulate_longitudinal`, `simulate_planar` and `snowjax.mjx.step`, against SciPy
 references (`tests/reference_terrain.py`, and `_wong_kondner` here for a slip angle).
@@ -341,27 +341,62 @@ def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
 
 
 # --------------------------------------------------------------------------------------
-# The one-method shear law through every workflow, against a SciPy reference written here
+# A wheel whose contact widens with depth, and the one-method shear law, through every
+# workflow, against SciPy references written here
 # --------------------------------------------------------------------------------------
+
+
+class BulgingWheel(sj.AbstractWheel):
+    """A rigid wheel whose section widens with depth (a bulging sidewall): the contact's
+    width at a point z deep is b(z) = b0 + 2 z tan(alpha).  One method over a rigid
+    wheel's fields: `contact_width`."""
+
+    diameter: Float[Array, "..."] = eqx.field(
+        converter=sj.as_float,
+        metadata=sj.parameter("m", "wheel diameter D", lower=0.0, open_lower=True),
+    )
+    width: Float[Array, "..."] = eqx.field(
+        converter=sj.as_float,
+        metadata=sj.parameter("m", "width b0 at the surface", lower=0.0, open_lower=True),
+    )
+    flare: Float[Array, "..."] = eqx.field(
+        converter=sj.as_float,
+        metadata=sj.parameter("-", "tan(alpha) of the sidewall", lower=0.0),
+    )
+
+    def contact_width(self, sinkage):
+        return self.width + 2 * sinkage * self.flare
+
+    @classmethod
+    def reference(cls):
+        return cls(0.736, 0.2, 0.3)
 
 
 def _kondner(u):
     return u / (1 + abs(u))
 
 
-def _wong_kondner(theta0, slip, beta, snow, diameter, width):
-    """(W, R, T, M, F_y) [N, N m] of a rigid wheel on Wong snow's front region with
-    Kondner's law, by SciPy's adaptive quadrature: tau along the resultant of the shear
-    displacements (4.10) and j_y = r (1 - i)(theta0 - theta) tan(beta), K_y = K
-    (`Lateral()`), the contact panels cut where j_x changes sign and graded at the entry."""
+def _janosi_hanamoto(u):
+    return -math.expm1(-u)
+
+
+def _reference_contact(theta0, slip, beta, case):
+    """(W, R, T, M, F_y) [N, N m] of a rigid wheel on the front region by SciPy's adaptive
+    quadrature: at a point of the rim z = r (cos theta - cos theta0) deep (4.5), the
+    contact `case["width"](z)` wide, the normal stress `case["pressure"](z, b)`, and tau
+    along the resultant of the shear displacements (4.10) and j_y = r (1 - i)(theta0 -
+    theta) tan(beta) with K_y = K (`Lateral()`), g = `case["g"]` of the resultant; the
+    panels cut where j_x changes sign and graded at the entry."""
     from scipy import integrate, optimize
 
-    p_w, z_w, c, tan_phi, k = (float(x) for x in (snow.p_w, snow.z_w, snow.cohesion,
-                                                   snow.tan_phi, snow.shear_modulus))  # fmt: skip
-    r = diameter / 2
+    r = case["diameter"] / 2
+    c, tan_phi, k = case["c"], case["tan_phi"], case["k"]
+
+    def depth(th):
+        return max(r * (math.cos(th) - math.cos(theta0)), 0.0)
 
     def sig(th):
-        return -p_w * math.log1p(-max(r * (math.cos(th) - math.cos(theta0)), 0.0) / z_w)
+        return case["pressure"](depth(th), case["width"](depth(th)))
 
     def j_x(th):
         return r * ((theta0 - th) - (1 - slip) * (math.sin(theta0) - math.sin(th)))
@@ -369,7 +404,7 @@ def _wong_kondner(theta0, slip, beta, snow, diameter, width):
     def taus(th):
         a, b = j_x(th) / k, r * (1 - slip) * (theta0 - th) * math.tan(beta) / k
         u = math.hypot(a, b)
-        tau = (c + sig(th) * tan_phi) * _kondner(u)
+        tau = (c + sig(th) * tan_phi) * case["g"](u)
         return (tau * a / u, tau * b / u) if u > 0 else (0.0, 0.0)
 
     pts = {0.0, theta0} | {theta0 - m * k / r for m in (1, 4, 16, 64) if m * k / r < theta0}
@@ -386,22 +421,20 @@ def _wong_kondner(theta0, slip, beta, snow, diameter, width):
         lambda t: taus(t)[0] * r,
         lambda t: taus(t)[1],
     ]
-    quad = (
-        lambda f: sum(  # noqa: E731
-            integrate.quad(f, lo, hi, epsabs=0.0, epsrel=1e-12, limit=400)[0]
-            for lo, hi in zip(pts[:-1], pts[1:])
-        )
-    )
-    return np.array([quad(f) * r * width for f in fns])
+    quad = lambda f: sum(  # noqa: E731
+        integrate.quad(lambda t: f(t) * case["width"](depth(t)), lo, hi, epsabs=0.0,
+                       epsrel=1e-12, limit=400)[0]
+        for lo, hi in zip(pts[:-1], pts[1:])
+    )  # fmt: skip
+    return np.array([quad(f) * r for f in fns])
 
 
-def _check_against_reference(load, slip, beta, entry_angle, drawbar_pull, lateral_force, wheel):
+def _check_against_reference(case, load, slip, beta, entry_angle, drawbar_pull, lateral_force):
     """The recorded forces of wheels at (load, slip, slip angle) against the reference at
     their entry angle: W = load (the equilibrium), T - R and F_y within 1e-6 of the load."""
-    diameter, width = float(wheel.diameter), float(wheel.width)
     for k in range(len(load)):
-        w, r, t, _, fy = _wong_kondner(
-            float(entry_angle[k]), float(slip[k]), float(beta[k]), FRESH, diameter, width
+        w, r, t, _, fy = _reference_contact(
+            float(entry_angle[k]), float(slip[k]), float(beta[k]), case
         )
         scale = float(load[k])
         assert w == pytest.approx(scale, rel=1e-6)
@@ -411,32 +444,82 @@ def _check_against_reference(load, slip, beta, entry_angle, drawbar_pull, latera
 
 FRESH = sj.WongSnow.thesis_fresh_snow()
 KONDNER = KondnerShear()
+BULGING = BulgingWheel(0.736, 0.2, 0.3)
+
+
+def _case(wheel, law, snow=FRESH):
+    """The reference's description of a (wheel, shear law) on Wong snow or Bekker soil."""
+    if isinstance(snow, sj.WongSnow):
+        p_w, z_w = float(snow.p_w), float(snow.z_w)
+        pressure = lambda z, b: -p_w * math.log1p(-z / z_w)  # noqa: E731
+    else:
+        n, k_c, k_phi = float(snow.n), float(snow.k_c), float(snow.k_phi)
+        pressure = lambda z, b: (k_c / b + k_phi) * z**n  # noqa: E731
+    b0 = float(wheel.width)
+    flare = float(getattr(wheel, "flare", 0.0))
+    return {
+        "diameter": float(wheel.diameter),
+        "pressure": pressure,
+        "width": lambda z: b0 + 2 * z * flare,
+        "g": _kondner if law is KONDNER else _janosi_hanamoto,
+        "c": float(snow.cohesion),
+        "tan_phi": float(snow.tan_phi),
+        "k": float(snow.shear_modulus),
+    }
+
+
+EXTENSIONS = {
+    "kondner-shear": (sj.RigidWheel.thesis_tire(), KONDNER),
+    "bulging-wheel": (BULGING, sj.JanosiHanamoto()),
+}
+
+
+@pytest.mark.slow  # its own compiles (make test-slow)
+def test_a_wheel_that_widens_with_depth_matches_the_reference():
+    """`BulgingWheel` (one method over a rim's fields) on Bekker soil, whose pressure
+    depends on the width, and on Wong snow (the any-terrain rule: its contact is not the
+    closed-form rule's rim of constant width), driving and braking, straight and under a
+    slip angle, against the SciPy reference; it sinks less than the rim of its surface
+    width."""
+    loads, slips = np.array([2000.0, 3500.0, 3500.0]), np.array([0.3, -0.2, 0.1])
+    angles = np.array([0.0, 0.0, 0.15])
+    for snow in (sj.BekkerSoil.snow_us(), FRESH):
+        st = sj.solve_wheel(BULGING, snow, loads, slips, slip_angle=angles)
+        assert np.all(np.asarray(st.status) == sj.Status.CONVERGED), st.status
+        _check_against_reference(
+            _case(BULGING, None, snow), loads, slips, angles, st.entry_angle,
+            st.drawbar_pull, st.lateral_force,
+        )  # fmt: skip
+        rim = sj.solve_wheel(sj.RigidWheel(0.736, 0.2), snow, loads, slips, slip_angle=angles)
+        assert np.all(np.asarray(st.sinkage) < np.asarray(rim.sinkage))
 
 
 @pytest.mark.slow  # the simulations' own compiles (make test-slow)
-def test_the_one_method_shear_law_drives_and_brakes_in_both_simulations():
-    """`KondnerShear` (one method) in `simulate_longitudinal` and `simulate_planar`: the
-    wheels' recorded forces, driving and braking, equal the SciPy reference's at their
-    recorded slip, slip angle and entry angle."""
-    wheel = sj.RigidWheel.thesis_tire()
+@pytest.mark.parametrize("name", EXTENSIONS)
+def test_extensions_drive_and_brake_in_both_simulations(name):
+    """`KondnerShear` (one method) and `BulgingWheel` in `simulate_longitudinal` and
+    `simulate_planar`: the wheels' recorded forces, driving and braking, equal the SciPy
+    reference's at their recorded slip, slip angle and entry angle."""
+    wheel, law = EXTENSIONS[name]
+    case = _case(wheel, law)
     load = 3500.0
     vehicle = sj.Vehicle(mass=2 * load / 9.80665, wheel_inertia=1.5, wheel=wheel, num_wheels=2)
     torque = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -400.0]))
     traj = sj.simulate_longitudinal(vehicle, FRESH, torque, 1.2, 0.05, initial_speed=2.0,
-                                    shear=KONDNER)  # fmt: skip
+                                    shear=law)  # fmt: skip
     slips = np.asarray(traj.slip[:, 0])
     rows = [int(np.argmax(slips)), int(np.argmin(slips))]
     assert slips[rows[0]] > 0.05 and slips[rows[1]] < -0.05, slips  # driving and braking
     assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
     _check_against_reference(
-        np.full(2, load), slips[rows], np.zeros(2), np.asarray(traj.entry_angle[rows, 0]),
-        np.asarray(traj.drawbar_pull[rows, 0]), np.zeros(2), wheel,
+        case, np.full(2, load), slips[rows], np.zeros(2), np.asarray(traj.entry_angle[rows, 0]),
+        np.asarray(traj.drawbar_pull[rows, 0]), np.zeros(2),
     )  # fmt: skip
 
     planar = sj.PlanarVehicle(1400.0, 1400.0 * (2.5**2 + 1.5**2) / 12, 1.5, wheel, 2.5, 1.5)
     drive = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -300.0]))
     traj = sj.simulate_planar(planar, FRESH, 0.15, drive, 1.2, 0.05, initial_speed=2.0,
-                              shear=KONDNER)  # fmt: skip
+                              shear=law)  # fmt: skip
     assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
     slips = np.asarray(traj.slip)
     rows = np.array([np.argmax(slips[:, 0]), np.argmin(slips[:, 0])])
@@ -446,17 +529,18 @@ def test_the_one_method_shear_law_drives_and_brakes_in_both_simulations():
     loads = np.asarray(planar.wheel_load)
     for k in range(4):
         _check_against_reference(
-            np.full(2, loads[k]), slips[rows, k], beta[:, k],
+            case, np.full(2, loads[k]), slips[rows, k], beta[:, k],
             np.asarray(traj.entry_angle)[rows, k], np.asarray(traj.drawbar_pull)[rows, k],
-            np.asarray(traj.lateral_force)[rows, k], wheel,
+            np.asarray(traj.lateral_force)[rows, k],
         )  # fmt: skip
 
 
 @pytest.mark.slow  # an MJX step's own compile (make test-slow)
-def test_the_one_method_shear_law_in_an_mjx_step():
-    """`KondnerShear` in `snowjax.mjx.step`: the shipped rover moving forwards and
-    sideways, front wheels driven and rear wheels braked; each wheel's forces equal the
-    SciPy reference's at its slip, slip angle and entry angle."""
+@pytest.mark.parametrize("name", EXTENSIONS)
+def test_extensions_in_an_mjx_step(name):
+    """`KondnerShear` and `BulgingWheel` in `snowjax.mjx.step`: the shipped rover moving
+    forwards and sideways, front wheels driven and rear wheels braked; each wheel's forces
+    equal the SciPy reference's at its slip, slip angle and entry angle."""
     try:
         from mujoco import mjx
 
@@ -465,22 +549,21 @@ def test_the_one_method_shear_law_in_an_mjx_step():
         if os.environ.get("CI", "").lower() == "true":
             raise
         pytest.skip("the snowjax[mjx] extra is not installed")
-    model, wheels = smjx.load_rover()
+    wheel, law = EXTENSIONS[name]
+    model, wheels = smjx.load_rover(wheel=wheel)
     m = mjx.put_model(model)
     d0 = mjx.make_data(m)
-    radius = float(wheels.wheel.diameter) / 2
-    spins = np.array([2.0 / (radius * 0.8), 2.0 / (radius * 0.8), 2.0 / (radius * 1.25),
-                      2.0 / (radius * 1.25)])  # fmt: skip
+    radius = float(wheel.diameter) / 2
+    spins = 2.0 / (radius * np.array([0.8, 0.8, 1.25, 1.25]))
     qvel = d0.qvel.at[0].set(2.0).at[1].set(0.4).at[np.asarray(wheels.dof_ids)].set(spins)
-    d = d0.replace(qvel=qvel)
-    _, f = jax.jit(lambda d: smjx.step(m, d, wheels, FRESH, shear=KONDNER))(d)
+    _, f = jax.jit(lambda d: smjx.step(m, d, wheels, FRESH, shear=law))(d0.replace(qvel=qvel))
     slip = np.asarray(f.slip)
     assert np.all(slip[:2] > 0.05) and np.all(slip[2:] < -0.05), slip
     assert np.all(np.abs(np.asarray(f.slip_angle)) > 1e-3)
     assert np.all(np.asarray(f.status) == sj.Status.CONVERGED)
     _check_against_reference(
-        np.asarray(f.load), slip, np.asarray(f.slip_angle), np.asarray(f.entry_angle),
-        np.asarray(f.longitudinal_force), np.asarray(f.lateral_force), wheels.wheel,
+        _case(wheel, law), np.asarray(f.load), slip, np.asarray(f.slip_angle),
+        np.asarray(f.entry_angle), np.asarray(f.longitudinal_force), np.asarray(f.lateral_force),
     )  # fmt: skip
 
 
@@ -545,3 +628,69 @@ def test_fit_wheel_and_sweep_take_the_one_method_shear_law(tmp_path):
     for k, (_, sinkage, pull) in enumerate(reference):
         assert rows["sinkage"][k] == pytest.approx(sinkage, rel=1e-6)
         assert rows["drawbar_pull"][k] == pytest.approx(pull, abs=1e-6 * LOADS[k])
+
+
+BEKKER = sj.BekkerSoil(1.1, 5e3, 800e3, 1.5e3, 0.55, shear_modulus=0.02)  # a firm soil
+BULGE_LOADS, BULGE_SLIPS = np.array([2000.0, 3500.0]), np.array([0.3, -0.2])
+
+
+def _bulging_reference(load, slip, flare=0.3, k_phi=None):
+    """(sinkage [m], drawbar pull [N]) of `BulgingWheel` at (load [N], slip) on `BEKKER`,
+    by brentq on the SciPy reference's W."""
+    from scipy import optimize
+
+    wheel = BulgingWheel(0.736, 0.2, flare)
+    snow = BEKKER if k_phi is None else eqx.tree_at(lambda s: s.k_phi, BEKKER, k_phi)
+    case = _case(wheel, None, snow)
+    theta0 = optimize.brentq(
+        lambda th: _reference_contact(th, slip, 0.0, case)[0] - load,
+        1e-3, 1.4, xtol=1e-15, rtol=1e-14,
+    )  # fmt: skip
+    _, r, t, _, _ = _reference_contact(theta0, slip, 0.0, case)
+    return 0.368 * (1 - math.cos(theta0)), t - r
+
+
+@pytest.mark.slow  # a gradient's, a fit's and a sweep's own compiles (make test-slow)
+def test_a_wheel_that_widens_with_depth_in_grad_fit_and_sweep(tmp_path):
+    """`BulgingWheel` on a Bekker soil: d(drawbar pull)/d(flare) and d/d(k_phi) against
+    central differences of the SciPy reference (relative step 1e-4), `fit_wheel`
+    recovering k_phi from the reference's sinkages and drawbar pulls, and `sweep`'s rows
+    (a column for the flare) equal to the reference within 1e-6 of the load."""
+    wheel = jax.tree_util.tree_map(lambda x: jnp.full(2, x), BULGING)
+    snow = jax.tree_util.tree_map(lambda x: jnp.full(2, x), BEKKER)
+
+    def pull(wheel, snow):
+        return sj.solve_wheel(wheel, snow, BULGE_LOADS, BULGE_SLIPS).drawbar_pull
+
+    d_wheel, d_snow = jax.jacrev(pull, argnums=(0, 1))(wheel, snow)
+    k_phi = float(BEKKER.k_phi)
+    for k in range(2):
+        for got, field, value in ((d_wheel.flare, "flare", 0.3), (d_snow.k_phi, "k_phi", k_phi)):
+            h = 1e-4 * value
+            point = (float(BULGE_LOADS[k]), float(BULGE_SLIPS[k]))
+            up = _bulging_reference(*point, **{field: value + h})[1]
+            down = _bulging_reference(*point, **{field: value - h})[1]
+            expected = (up - down) / (2 * h)
+            got = float(got[k, k])
+            assert got == pytest.approx(expected, rel=1e-6, abs=1e-9 * BULGE_LOADS[k]), field
+
+    reference = [_bulging_reference(*point) for point in zip(BULGE_LOADS, BULGE_SLIPS)]
+    result = sj.fit_wheel(
+        BULGING,
+        eqx.tree_at(lambda s: s.k_phi, BEKKER, 0.5 * k_phi),
+        BULGE_LOADS,
+        BULGE_SLIPS,
+        fit=("k_phi",),
+        sinkage=np.array([x[0] for x in reference]),
+        drawbar_pull=np.array([x[1] for x in reference]),
+    )
+    assert result.params["k_phi"] == pytest.approx(k_phi, rel=1e-6)
+    swept = sj.sweep([BULGING, BulgingWheel(0.736, 0.2, 0.5)], BEKKER, BULGE_LOADS, BULGE_SLIPS,
+                     out=tmp_path / "sweep", progress=False, formats=("npz",))  # fmt: skip
+    rows = dict(np.load(swept.files["npz"]))
+    assert "flare" in rows
+    for i in range(len(rows["load"])):
+        point = (float(rows["load"][i]), float(rows["slip"][i]))
+        sinkage, drawbar_pull = _bulging_reference(*point, flare=float(rows["flare"][i]))
+        assert rows["sinkage"][i] == pytest.approx(sinkage, rel=1e-6)
+        assert rows["drawbar_pull"][i] == pytest.approx(drawbar_pull, abs=1e-6 * rows["load"][i])

@@ -98,7 +98,8 @@ def test_module_length():
 def _recipe_linear_soil():
     """The `LinearSoil` of the extending guide's recipe, executed as written there."""
     text = (PKG.parent / "docs" / "guide" / "extending.md").read_text()
-    recipe = text[text.index("## Adding a terrain law, a stress distribution or a shear law") :]
+    heading = "## Adding a terrain law, a stress distribution, a shear law or a wheel"
+    recipe = text[text.index(heading) :]
     code = recipe[recipe.index("```python\n") + len("```python\n") : recipe.index("```\n\n")]
     namespace: dict = {}
     exec(compile(code, "extending.md", "exec"), namespace)

@@ -57,11 +57,11 @@ from .general import (
     _rule,
     _sinh_offsets,
     _stresses_at,
-    _tread_terms,
     general_contact,
 )
 from .geometry import (
     AbstractWheel,
+    _plain_rim,
     _shear_displacement,
     _sincos_half,
     max_sinkage,
@@ -85,7 +85,7 @@ def _closed_form_rule(terrain, distribution, wheel) -> bool:
     closed forms of its rim integrals (`AbstractTerrain.front_rim_integrals`: `WongSnow`)
     on the front region (straight running; the caller checks the slip angle)."""
     offered = type(terrain).front_rim_integrals is not AbstractTerrain.front_rim_integrals
-    return offered and _is_front(distribution) and not type(wheel).deflects
+    return offered and _is_front(distribution) and _plain_rim(wheel)
 
 
 def normal_stress(
@@ -120,18 +120,18 @@ def normal_stress(
             + wheel.diameter * jnp.sin(jnp.asarray(theta) / 2) ** 2
         )
         return snow.pressure_at_clearance(height, wheel.width)
-    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
-    return _rim_stress_properties(theta, entry_angle, slip, wheel, snow, distribution, tread)[0]
+    contact = type(wheel).contact(wheel, jnp.asarray(entry_angle), snow)
+    return _rim_stress_properties(theta, slip, contact, snow, distribution)[0]
 
 
-def _rim_stress_properties(theta, entry_angle, slip, wheel, terrain, distribution, tread):
-    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain (a
-    deflecting tyre's flat, `tread`, at its sinkage)."""
-    theta0, theta = jnp.asarray(entry_angle), jnp.asarray(theta)
+def _rim_stress_properties(theta, slip, contact, terrain, distribution):
+    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angle theta on any terrain, of a
+    wheel's `contact` (`AbstractContact`: a deflecting tyre's flat at its sinkage)."""
+    theta0, theta = contact.entry_angle, jnp.asarray(theta)
     stress_angle = distribution.stress_angle(theta, theta0, slip)
-    return _stresses_at(
-        theta, stress_angle, theta0, wheel.diameter, terrain, wheel.width, tread, guard=False
-    )
+    sin, cos = jnp.sin(theta), jnp.cos(theta)
+    width = contact.points(theta, sin, cos).width
+    return _stresses_at(theta, stress_angle, contact, terrain, width, guard=False)
 
 
 def shear_stress(
@@ -170,20 +170,17 @@ def shear_stress(
     law = _shear_law(shear)
     _check_model(wheel, snow, distribution, law)
     distribution = _as_distribution(distribution)
-    tread = type(wheel).tread(wheel, jnp.asarray(entry_angle), snow)
+    contact = type(wheel).contact(wheel, jnp.asarray(entry_angle), snow)
     if _closed_form_rule(snow, distribution, wheel):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
         c, tan_phi, k = snow.cohesion, snow.tan_phi, snow.shear_modulus
     else:
-        sigma, c, tan_phi, k = _rim_stress_properties(
-            theta, entry_angle, slip, wheel, snow, distribution, tread
-        )
+        sigma, c, tan_phi, k = _rim_stress_properties(theta, slip, contact, snow, distribution)
     if not law.mobilises:
         return jnp.zeros_like(sigma)
-    j = shear_displacement(theta, entry_angle, slip, wheel.diameter)
-    if tread is not None:
-        theta = jnp.asarray(theta)
-        j = j - wheel.radius * _tread_terms(theta, jnp.sin(theta), jnp.cos(theta), tread)[0]
+    theta = jnp.asarray(theta)
+    shortening = contact.points(theta, jnp.sin(theta), jnp.cos(theta)).shortening
+    j = shear_displacement(theta, entry_angle, slip, wheel.diameter) - wheel.radius * shortening
     g = law.mobilisation(j, k, sigma, entry_angle, slip, wheel.diameter, snow)
     return (c + sigma * tan_phi) * g
 
@@ -432,32 +429,19 @@ def _contact_batch(
     """
 
     def one(th, i, wh, tr, ds, sd, bt):
-        tread = type(wh).tread(wh, th, tr)
+        contact = type(wh).contact(wh, th, tr)
         if closed_form:
             out = _closed_form_contact(
                 th, i, wh.diameter, wh.width, tr, shear, n, bt, braking, vertical_only, moving_rule
             )
         else:
             out = general_contact(
-                th,
-                i,
-                wh.diameter,
-                wh.width,
-                tr,
-                ds,
-                shear,
-                n,
-                braking,
-                vertical_only,
-                sd,
-                bulldozing,
-                tread,
+                contact, i, tr, ds, shear, n, braking, vertical_only, sd, bulldozing
             )
         if vertical_only:
             return out
-        flexing = type(wh).flexing_resistance(wh, tread)
-        if flexing is not None:  # the tyre's hysteresis, part of the motion resistance
-            out = (out[0], out[1] + flexing, *out[2:])
+        # The wheel's own deformation (a tyre's hysteresis), part of the motion resistance.
+        out = (out[0], out[1] + contact.flexing_resistance(), *out[2:])
         if sd is not None:
             return out
         return (*out, jnp.zeros_like(th), jnp.zeros_like(th))

@@ -39,6 +39,7 @@ from jaxtyping import Array
 
 from .distribution import _is_front
 from .geometry import (
+    _layer_width,
     _rim_sinkage_between,
     _shear_displacement,
     _shear_displacement_slope,
@@ -127,12 +128,12 @@ def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype, log_end=None):
     )
 
 
-def _front_base_end(distribution, terrain, tread, theta0):
-    """The angle [rad] where a front-region contact is deepest (0; a deflecting tyre's
-    flat's front end theta_f), if the terrain has a base (static); None otherwise."""
+def _front_base_end(distribution, terrain, contact):
+    """The angle [rad] where a front-region contact is deepest (`contact.lowest_angle`), if
+    the terrain has a base (static); None otherwise."""
     if not (_is_front(distribution) and terrain.has_base()):
         return None
-    return jnp.zeros_like(theta0) if tread is None else tread.half_angle
+    return contact.lowest_angle()
 
 
 def _safe_arccos(x):
@@ -156,36 +157,23 @@ def _below_base(sinkage, depth):
     return jnp.minimum(sinkage, depth * (1 - 4 * eps))
 
 
-def _stresses_at(theta, theta_eff, theta0, diameter, terrain, width, tread, guard=True):
-    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at rim angles theta [rad] whose stress
-    angle is theta_eff [rad], at entry angle theta0 [rad] of a rim of diameter D [m].
+def _stresses_at(theta, theta_eff, contact, terrain, width, guard=True):
+    """(sigma [Pa], c [Pa], tan phi [-], K [m]) at angles theta [rad] whose stress angle is
+    theta_eff [rad], of a wheel's `contact` (`AbstractContact`) of width b [m].
 
-    The law at the stress angle's rim sinkage z = D [sin^2(theta0/2) - sin^2(theta_eff/2)]
-    (4.5).  On a law with a base (`AbstractTerrain.has_base`) the normal stress is the
-    law at the height above the base, `pressure_at_clearance((depth - D sin^2(theta0/2)) +
-    D sin^2(theta_eff/2))` (for a tyre measured from its flat): free of the cancellation
-    of depth - z next to the base, where
-    a law such as Wong's diverges (in float32 the rim sinkage rounds to the base within
-    4e-4 rad of the lowest point).  The strength (c, tan phi, K) is the law's at z, kept
-    4 ulp above the base (`_below_base`; `guard` False: not kept).
-
-    A deflecting tyre's tread (`tread` not None) reaches no deeper than its flat, z_f,
-    and its flat carries the flat's pressure p_f (Bekker's and Wong's elastic mode): on
-    the flat, |theta| < theta_f, and wherever the stress angle lies on it (a rear
-    region's points mapped onto the flat) the normal stress is p_f itself, under every
-    distribution (the law's at z_f by construction, but not in floating point where z_f
-    rounds to a base).
+    The law at the depth of the stress angle's point, z = (the contact's deepest point)
+    less `contact.rise(theta, theta_eff)` (on a rim 4.5, `D [sin^2(theta0/2) -
+    sin^2(theta_eff/2)]`).  On a law with a base (`AbstractTerrain.has_base`) the normal
+    stress is the law at the height above the base, `pressure_at_clearance((depth - z_low)
+    + rise)`: free of the cancellation of depth - z next to the base, where a law such as
+    Wong's diverges (in float32 the rim sinkage rounds to the base within 4e-4 rad of the
+    lowest point).  The strength (c, tan phi, K) is the law's at z, kept 4 ulp above the
+    base (`_below_base`; `guard` False: not kept).  The contact has the last word on the
+    normal stress (`contact.normal_stress`: a tyre's flat carries its own pressure).
     """
-    half_sin, _ = _sincos_half(theta_eff)
-    # Measured from the contact's lowest point: the rim's, or a tyre's flat at z_f, a
-    # chord delta = D sin^2(theta_f / 2) above the undeflected circle's lowest point.
-    if tread is None:
-        low, low_sin2 = diameter * jnp.sin(theta0 / 2) ** 2, 0.0
-    else:
-        low, low_sin2 = tread.sinkage, tread.deflection / diameter
-        on_flat = (jnp.abs(theta) < tread.half_angle) | (jnp.abs(theta_eff) < tread.half_angle)
-    rise = diameter * jnp.maximum(half_sin**2 - low_sin2, 0.0)  # above the lowest point
-    z = low - rise if tread is None else jnp.where(on_flat, low, low - rise)
+    low = contact.lowest_sinkage()
+    rise = contact.rise(theta, theta_eff)
+    z = low - rise
     sigma, cohesion, tan_phi, modulus = terrain.rim_properties(
         _below_base(z, terrain.depth) if guard else z, width
     )
@@ -200,143 +188,30 @@ def _stresses_at(theta, theta_eff, theta0, diameter, terrain, width, tread, guar
         clearance = jnp.where(gap > 4 * eps * terrain.depth, gap, 0.0) + rise
         tiny = jnp.finfo(clearance.dtype).tiny
         sigma = terrain.pressure_at_clearance(jnp.maximum(clearance, tiny), width)
-    if tread is not None:
-        sigma = jnp.where(on_flat, tread.pressure.astype(sigma.dtype), sigma)
-    return sigma, cohesion, tan_phi, modulus
+    return contact.normal_stress(sigma, theta, theta_eff), cohesion, tan_phi, modulus
 
 
-def _layer_width(modulus, radius, slope):
-    """Width [rad] of the layer over which the shear mobilises where (4.10) changes with
-    slope dj/dtheta / r = `slope` [-]: K / (r |slope|), K = `modulus` [m]."""
-    return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
-
-
-def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
-    """Where the shear displacement (4.10) of a braked wheel changes sign inside the
-    contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
-    theta_star).
-
-    For slip < 0 (k = 1 - i > 1), f(theta) = j / r = (theta0 - theta) - k (sin theta0 -
-    sin theta) is concave and increasing on |theta| < theta_star = arccos(1/k) and
-    vanishes at theta0; a second root exists when f(lo) < 0 and theta_star < theta0,
-    lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
-    left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
-    (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
-    polynomials (faster to run, more code to compile) or XLA's.  `offset` (None: 0): the
-    root of f - offset instead (a deflecting tyre's rear arc, whose travel the flat
-    shortened).
-    """
-    sin_theta0 = jnp.sin(theta0)
-    theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
-    # The front region (theta_r None) starts at lo = 0.
-    lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
-    shift = (lambda f: f) if offset is None else (lambda f: f - offset)
-    f_lo = shift(_shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0))
-    has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
-
-    def newton(_, th):
-        if taylor:  # |th| <= pi
-            half_sin, half_cos = _sincos_half(th)
-            sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
-        else:
-            sin, cos = jnp.sin(th), jnp.cos(th)
-        f = shift(_shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0))
-        slope = _shear_displacement_slope(cos, slip)
-        return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
-
-    angle = jax.lax.fori_loop(0, steps, newton, lo)
-    return angle, has_root, theta_star
-
-
-def _tread_terms(theta, sin, cos, tread):
-    """A deflecting tyre's changes to the rim at nodes theta [rad] (`Tread`: the flat on
-    |theta| < theta_f at sinkage z_f): (shortening [-], cos_n, sin_n, element, arm_tau,
-    arm_sigma).
-
-    - shortening: the tread's travel from the entry lost to the flat, per r:
-      (theta_f - u) - (sin theta_f - sin u), u = clip(theta, -theta_f, theta_f); the
-      shear displacement (4.10) and the lateral one lose r times it.
-    - On the flat the normal points up (cos_n, sin_n) = (1, 0), the length element is
-      dx = r cos(theta) d theta (element cos theta per r d theta), the shear stress acts
-      cos(theta_f) r below the axle (arm_tau) and the normal stress at x = r sin theta in
-      front of it (arm_sigma = sin theta).  On the rim: the rim's (cos, sin), 1, 1, 0.
-    """
-    half, cos_half = tread.half_angle, tread.cos_half_angle
-    u = jnp.clip(theta, -half, half)
-    shortening = (half - u) - (jnp.sin(half) - jnp.sin(u))
-    flat = jnp.abs(theta) < half
-    one, zero = jnp.ones_like(theta), jnp.zeros_like(theta)
-    return (
-        shortening,
-        jnp.where(flat, one, cos),
-        jnp.where(flat, zero, sin),
-        jnp.where(flat, cos, one),
-        jnp.where(flat, cos_half, one),
-        jnp.where(flat, sin, zero),
-    )
-
-
-def _braking_split(theta0, theta_r, slip, tread, rear=True):
-    """(angle, has_root): where a braked wheel's shear displacement changes sign.
-
-    The rim's (`_shear_sign_change`).  A deflecting tyre's j equals the rim's on the entry
-    arc (theta >= theta_f); on the flat it is linear in sin(theta),
-    j = j(theta_f) + i r (sin theta_f - sin theta); on the rear arc (theta < -theta_f) it
-    is the rim's less r 2 (theta_f - sin theta_f).  The first root found, in that order
-    (all per r: the root does not depend on the radius).  `rear` False: the contact has
-    no rear arc (the front region), which is then not searched.
-    """
-    split, has_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False)
-    if tread is None:
-        return split, has_root
-    half = tread.half_angle
-    on_arc = has_root & (split >= half)
-    j_f = _shear_displacement(half, theta0, slip, 1.0)
-    lo = jnp.maximum(-half, jnp.zeros_like(half) if theta_r is None else theta_r)
-    sin_root = jnp.sin(half) + j_f / jnp.where(slip < 0, slip, -1.0)
-    on_flat = (slip < 0) & (sin_root > jnp.sin(lo)) & (sin_root < jnp.sin(half))
-    flat_root = jnp.arcsin(jnp.clip(sin_root, -1.0, 1.0))
-    angle, found = jnp.where(on_arc, split, flat_root), on_arc | on_flat
-    if not rear:
-        return angle, found
-    shortening = 2 * (half - jnp.sin(half))
-    back, back_root, _ = _shear_sign_change(theta0, theta_r, slip, 12, False, shortening)
-    on_rear = back_root & (back < -half)
-    return jnp.where(found, angle, back), found | on_rear
-
-
-def _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution, tread):
+def _braking_point(slip, contact, terrain, distribution):
     """(angle, grading scale) of the panel cut at a braked wheel's sign change of the shear
-    displacement (`_braking_split`; where there is none, the middle of the contact and no
-    grading), the scale the width of the shear layer there."""
-    r = diameter / 2
-    split, has_root = _braking_split(theta0, theta_r, slip, tread, not _is_front(distribution))
+    displacement (`contact.shear_sign_change`; where there is none, the middle of the
+    contact and no grading), the scale the width of the shear layer there."""
+    wheel, theta0 = contact.wheel, contact.entry_angle
+    theta_r = distribution.exit_angle(theta0, slip)
+    split, has_root = contact.shear_sign_change(theta_r, slip, not _is_front(distribution))
     split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
-    z_split = _rim_sinkage_between(distribution.stress_angle(split, theta0, slip), theta0, diameter)
-    k_split = terrain.rim_properties(z_split, width)[3]
-    slope = _shear_displacement_slope(jnp.cos(split), slip)
-    if tread is not None:  # on the flat dj/dx = i: dj/dtheta / r = -i cos(theta)
-        on_flat = jnp.abs(split) < tread.half_angle
-        slope = jnp.where(on_flat, -slip * jnp.cos(split), slope)
-    return split, jnp.where(has_root, _layer_width(k_split, r, slope), jnp.inf)
+    theta_eff = distribution.stress_angle(split, theta0, slip)
+    z_split = _rim_sinkage_between(theta_eff, theta0, wheel.diameter)
+    k_split = terrain.rim_properties(z_split, type(wheel).contact_width(wheel, z_split))[3]
+    slope = contact.shear_slope(split, slip)
+    return split, jnp.where(has_root, _layer_width(k_split, wheel.diameter / 2, slope), jnp.inf)
 
 
 def general_contact(
-    theta0,
-    slip,
-    diameter,
-    width,
-    terrain,
-    distribution,
-    law,
-    n,
-    braking=True,
-    vertical_only=False,
-    side=None,
+    contact, slip, terrain, distribution, law, n, braking=True, vertical_only=False, side=None,
     bulldozing=False,
-    tread=None,
-):
-    """(W, R, T, M) of one wheel (scalar inputs) on any terrain; W alone if `vertical_only`.
+):  # fmt: skip
+    """(W, R, T, M) of one wheel's `contact` (`AbstractContact`, scalar inputs) on any
+    terrain; W alone if `vertical_only`.
 
     `distribution` is an `AbstractStressDistribution` (`FrontRegion`: 0..theta0;
     `WongReece`: theta_r..theta0 with the mirrored rear stresses), `law` the shear law
@@ -350,48 +225,46 @@ def general_contact(
     and M_z the moment about the vertical through the wheel centre [N m], with the
     sidewall bulldozing resistance if `bulldozing`.
 
-    `tread` is None (a rigid rim) or the `Tread` of a deflecting tyre (`tire.py`): its
-    flat replaces the rim on -theta_f..theta_f (`_tread_terms`), and the quadrature cuts
-    its panels at the flat's ends.
+    The contact gives the geometry at every node (`contact.points`: the normal's
+    direction, the length element, the width, the shortening of the shear displacement;
+    `contact.moment`: the stresses' moment about the axle) and the ends of its shape's
+    pieces (`contact.panel_ends`, e.g. a tyre's flat); the quadrature never asks which
+    wheel it has.
     """
+    wheel, theta0 = contact.wheel, contact.entry_angle
     dtype = theta0.dtype
+    diameter = wheel.diameter
     r = diameter / 2
     inf = jnp.asarray(jnp.inf, dtype)
     theta_r = distribution.exit_angle(theta0, slip)
-
-    _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(jnp.zeros_like(theta0), width)
-    entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
+    surface = jnp.zeros_like(theta0)
+    _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(
+        surface, type(wheel).contact_width(wheel, surface)
+    )
+    if side is not None:
+        tan_beta, k_lateral, unit_weight = side
     if side is None:
         entry_scale = law.entry_layer(theta0, slip, diameter, terrain, k_surface)
     elif not law.mobilises:
         entry_scale = inf
     else:
         # Width of the layer where the resultant displacement u rises to ~1.
-        tan_beta, k_lateral, unit_weight = side
         k_y = k_surface if k_lateral is None else k_lateral
+        entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
         rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
         entry_scale = 1 / (r * jnp.maximum(rate, 1e-12 / k_surface))
 
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
+    points += [(angle, inf) for angle in contact.panel_ends(distribution, slip)]
     # A law with a base on the front region: the contact's lowest point (the rim's at
     # theta = 0, a tyre's flat's front end) may lie on or next to the base, where the
     # stress rises like ln(clearance + r theta^2 / 2); a short panel there takes it.
-    base_end = _front_base_end(distribution, terrain, tread, theta0)
+    base_end = _front_base_end(distribution, terrain, contact)
     if base_end is not None:
         points.append((base_end + (theta0 - base_end) * BASE_PANEL, inf))
-    if tread is not None:
-        # The flat's ends (the normal's direction turns there; the rear end only where the
-        # contact extends behind the axle) and, in a rear region, the angle whose stress
-        # angle is the flat's front end (the sinkage's kink).
-        points.append((tread.half_angle, inf))
-        if not _is_front(distribution):
-            points.append((-tread.half_angle, inf))
-        points += [(a, inf) for a in distribution.rear_angles(tread.half_angle, theta0, slip)]
     if braking and law.mobilises:
-        points.append(
-            _braking_point(theta0, theta_r, slip, diameter, width, terrain, distribution, tread)
-        )
+        points.append(_braking_point(slip, contact, terrain, distribution))
     for breakpoint in terrain.breakpoint_sinkages():
         # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
         # and its mirror image in the rear region.
@@ -409,67 +282,46 @@ def general_contact(
         angles[:-1], angles[1:], scales[:-1], scales[1:], n, dtype, log_end
     )
 
-    # Normal stress: the terrain's law at the rim sinkage of the distribution's angle.
-    theta_eff = distribution.stress_angle(theta, theta0, slip)
-    sigma, cohesion, tan_phi, modulus = _stresses_at(
-        theta, theta_eff, theta0, diameter, terrain, width, tread
-    )
     half_sin, half_cos = _sincos_half(theta)
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
-    # A tyre's flat: the tread's travel from the entry it shortens (per r), the direction
-    # of the normal (cos_n, sin_n), the length element per r d theta and the moment arms
-    # per r of the shear and normal stresses (`_tread_terms`).
-    shortening, cos_n, sin_n, element, arm_tau, arm_sigma = 0.0, cos, sin, None, None, None
-    if tread is not None:
-        shortening, cos_n, sin_n, element, arm_tau, arm_sigma = _tread_terms(theta, sin, cos, tread)
+    at = contact.points(theta, sin, cos)
+    # Normal stress: the terrain's law at the depth of the distribution's angle.
+    theta_eff = distribution.stress_angle(theta, theta0, slip)
+    sigma, cohesion, tan_phi, modulus = _stresses_at(theta, theta_eff, contact, terrain, at.width)
     tau = tau_y = jnp.zeros_like(sigma)  # no shear stress (`NoShear`)
     if law.mobilises:
-        j = _shear_displacement(theta, theta0, slip, r, sin)
-        if tread is not None:
-            j = j - r * shortening  # the tread's travel less the ground's, (1 - i) x
+        # The rim's travel from the entry less the ground's (4.10), less what the
+        # contact's shape takes from it (a tyre's flat).
+        j = _shear_displacement(theta, theta0, slip, r, sin) - r * at.shortening
         strength = cohesion + sigma * tan_phi
         if side is None:
             tau = strength * law.mobilisation(j, modulus, sigma, theta0, slip, diameter, terrain)
         else:
-            j_y = r * (1 - slip) * (theta0 - theta) * tan_beta
-            if tread is not None:
-                j_y = j_y - r * (1 - slip) * shortening * tan_beta
+            j_y = r * (1 - slip) * (theta0 - theta - at.shortening) * tan_beta
             k_y = modulus if k_lateral is None else k_lateral
             share_x, share_y = law.combined_mobilisation(
                 j / modulus, j_y / k_y, sigma, theta0, slip, diameter, terrain
             )
             tau, tau_y = strength * share_x, strength * share_y
 
-    rb = r * width
-    rim_weight = weight  # per r d theta
-    if element is not None:
-        weight = weight * element
-    w_int = jnp.sum((sigma * cos_n + tau * sin_n) * weight) * rb
+    area = weight * at.element * at.width * r  # per unit stress
+    w_int = jnp.sum((sigma * at.normal_cos + tau * at.normal_sin) * area)
     if vertical_only:
         return w_int
-    r_int = jnp.sum(sigma * sin_n * weight) * rb
-    t_int = jnp.sum(tau * cos_n * weight) * rb
-    if arm_tau is None:
-        m_int = jnp.sum(tau * weight) * rb * r
-    else:
-        assert arm_sigma is not None  # set with arm_tau
-        m_int = jnp.sum((tau * arm_tau + sigma * arm_sigma) * weight) * rb * r
+    r_int = jnp.sum(sigma * at.normal_sin * area)
+    t_int = jnp.sum(tau * at.normal_cos * area)
+    m_int = jnp.sum(contact.moment(sigma, tau, theta, sin) * area) * r
     if side is None:
         return w_int, r_int, t_int, m_int
-    assert tau_y is not None
-    fy_int = jnp.sum(tau_y * weight) * rb
-    mz_int = jnp.sum(tau_y * sin * weight) * rb * r
+    fy_int = jnp.sum(tau_y * area)
+    mz_int = jnp.sum(tau_y * sin * area) * r
     if bulldozing:
-        # Side face below the surface: depth h(theta) = r (cos theta - cos theta0) over the
-        # contact (the flat's depth on it), length element r cos(theta) d theta, scaled by
-        # sin(beta).
-        depth = _rim_sinkage_between(theta, theta0, diameter)
-        if tread is not None:
-            depth = jnp.minimum(depth, tread.sinkage)
-        q = bulldozing_pressure(depth, c_surface, tan_phi_surface, unit_weight)
+        # Side faces below the surface, of the contact's depth, length element
+        # r cos(theta) d theta, scaled by sin(beta).
+        q = bulldozing_pressure(at.depth, c_surface, tan_phi_surface, unit_weight)
         sin_beta = tan_beta / jnp.sqrt(1 + tan_beta**2)
-        f_b = q * r * cos * rim_weight * sin_beta
+        f_b = q * r * cos * weight * sin_beta
         fy_int = fy_int + jnp.sum(f_b)
         mz_int = mz_int + jnp.sum(f_b * r * sin)
     return w_int, r_int, t_int, m_int, fy_int, mz_int

@@ -1,10 +1,12 @@
 """The wheel: the abstract module the contact pipeline runs, the rigid wheel (the thesis's
-model of a tyre on soft snow, section 4.1), and the rim geometry (4.5)-(4.10)."""
+model of a tyre on soft snow, section 4.1), its contact geometry as the contact integrals
+see it (`AbstractContact`, `RimContact`), and the rim geometry (4.5)-(4.10)."""
 
 import abc
 from typing import ClassVar, NamedTuple
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from equinox import AbstractVar
@@ -40,14 +42,15 @@ class AbstractWheel(eqx.Module):
 
     - `diameter` D [m] and `width` b [m] (abstract variables): the undeflected circle
       whose entry angle theta0 the solver finds, and the width of the contact;
-    - `tread(entry_angle, terrain)`: None for a rigid rim (the default), or the `Tread`
-      (the flat part of the tread, its depth and extent) at that entry angle;
+    - `contact(entry_angle, terrain)`: its contact geometry at that entry angle, an
+      `AbstractContact` (default `RimContact`, the rim of eqs. 4.5-4.10; a deflecting
+      tyre's has a flat);
+    - `contact_width(sinkage)`: the contact's width [m] at a point of the given depth
+      [m] (default `width`; a wheel whose section widens with depth overrides it);
     - `contact_sinkage(entry_angle, terrain)`: the sinkage reported as
       `WheelState.sinkage` [m] (default the rim's, eq. 4.15);
     - `deepest_reach(terrain)`: how deep the undeflected circle may sink on the terrain
       [m] (default: to its base);
-    - `flexing_resistance(tread)`: the resistance of the wheel's own deformation [N],
-      added to the motion resistance (default None: none, a rigid rim);
     - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
       metadata by default);
     - `reference()` (class method): a valid wheel of the kind, which stands in for
@@ -59,8 +62,8 @@ class AbstractWheel(eqx.Module):
     diameter: AbstractVar[Float[Array, "..."]]
     width: AbstractVar[Float[Array, "..."]]
 
-    #: Whether the wheel's tread can flatten (the closed-form rule of the rigid rim on
-    #: Wong snow is then not taken).
+    #: Whether the wheel's tread can flatten (its deflection's parameters are fitted by
+    #: `fit_wheel`).
     deflects: ClassVar[bool] = False
     #: Prefix used in error messages ("wheel.width must be ...").
     label: ClassVar[str] = "wheel"
@@ -70,9 +73,13 @@ class AbstractWheel(eqx.Module):
         """r = D / 2 [m]."""
         return self.diameter / 2
 
-    def tread(self, entry_angle, terrain) -> Tread | None:
-        """The flattened tread at entry angle theta0 [rad] on `terrain`; None: a rigid rim."""
-        return None
+    def contact(self, entry_angle, terrain) -> "AbstractContact":
+        """The contact geometry at entry angle theta0 [rad] on `terrain`: the rim's."""
+        return RimContact(self, entry_angle)
+
+    def contact_width(self, sinkage) -> Array:
+        """The contact's width b [m] at a point `sinkage` [m] deep: `width`."""
+        return self.width
 
     def contact_sinkage(self, entry_angle, terrain) -> Array:
         """Sinkage of the lowest point of the contact [m] at entry angle theta0 [rad]."""
@@ -82,11 +89,6 @@ class AbstractWheel(eqx.Module):
         """The deepest the undeflected circle's lowest point may sink [m] on `terrain`
         (the solver's cap on the entry angle): its base (`depth`) for a rim."""
         return terrain.depth
-
-    def flexing_resistance(self, tread: Tread | None) -> Array | None:
-        """The resistance of the wheel's own deformation [N] with the tread `tread`, added
-        to the motion resistance R (and so taken from the drawbar pull); None: none."""
-        return None
 
     def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range)."""
@@ -99,6 +101,15 @@ class AbstractWheel(eqx.Module):
     @abc.abstractmethod
     def reference(cls) -> "AbstractWheel":
         """A valid wheel of this kind (stands in for invalid batch elements)."""
+
+
+def _plain_rim(wheel) -> bool:
+    """Whether the wheel's contact is the rim of constant width (the closed-form rule of a
+    law with closed-form rim integrals applies to it)."""
+    kind = type(wheel)
+    return (
+        kind.contact is AbstractWheel.contact and kind.contact_width is AbstractWheel.contact_width
+    )
 
 
 class RigidWheel(AbstractWheel):
@@ -214,3 +225,135 @@ def _shear_displacement(theta, theta0, slip, radius, sin_theta=None, sin_theta0=
 def _shear_displacement_slope(cos_theta, slip):
     """dj/dtheta / r = -1 + (1 - i) cos theta [-], the derivative of (4.10) along the rim."""
     return -1 + (1 - slip) * cos_theta
+
+
+def _layer_width(modulus, radius, slope):
+    """Width [rad] of the layer over which the shear mobilises where (4.10) changes with
+    slope dj/dtheta / r = `slope` [-]: K / (r |slope|), K = `modulus` [m]."""
+    return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
+
+
+def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
+    """Where the shear displacement (4.10) of a braked wheel changes sign inside the
+    contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
+    theta_star).
+
+    For slip < 0 (k = 1 - i > 1), f(theta) = j / r = (theta0 - theta) - k (sin theta0 -
+    sin theta) is concave and increasing on |theta| < theta_star = arccos(1/k) and
+    vanishes at theta0; a second root exists when f(lo) < 0 and theta_star < theta0,
+    lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
+    left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
+    (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
+    polynomials (faster to run, more code to compile) or XLA's.  `offset` (None: 0): the
+    root of f - offset instead (a deflecting tyre's rear arc, whose travel the flat
+    shortened).
+    """
+    sin_theta0 = jnp.sin(theta0)
+    theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
+    # The front region (theta_r None) starts at lo = 0.
+    lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
+    shift = (lambda f: f) if offset is None else (lambda f: f - offset)
+    f_lo = shift(_shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0))
+    has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
+
+    def newton(_, th):
+        if taylor:  # |th| <= pi
+            half_sin, half_cos = _sincos_half(th)
+            sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+        else:
+            sin, cos = jnp.sin(th), jnp.cos(th)
+        f = shift(_shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0))
+        slope = _shear_displacement_slope(cos, slip)
+        return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
+
+    angle = jax.lax.fori_loop(0, steps, newton, lo)
+    return angle, has_root, theta_star
+
+
+class ContactPoints(NamedTuple):
+    """A wheel's contact at rim angles theta [rad] (each entry an array of the angles'
+    shape, or a scalar where it does not vary), what the contact integrals need of it:
+
+    - `shortening`: the travel from the entry that the wheel's shape takes from the shear
+      displacement (4.10), per r [-] (0 on a rim);
+    - `normal_cos`, `normal_sin`: the normal's direction, the normal stress's shares of W
+      and of R (cos theta, sin theta on a rim; (1, 0) on a tyre's flat);
+    - `element`: the length of the contact per r d theta [-] (1 on a rim);
+    - `depth`: the point's depth below the surface [m] (4.5 on a rim);
+    - `width`: the contact's width b [m] there.
+    """
+
+    shortening: Array | float
+    normal_cos: Array
+    normal_sin: Array
+    element: Array | float
+    depth: Array
+    width: Array
+
+
+class AbstractContact(eqx.Module):
+    """A wheel's contact with the terrain at one entry angle theta0 [rad] (abstract): the
+    geometry the contact integrals ask of a wheel, so that they never ask which wheel it
+    is.  Every method has the rigid rim's answer (eqs. 4.5-4.10) as its default;
+    `RimContact` is the rim, a deflecting tyre's flat (`TreadContact`) overrides them.
+    """
+
+    wheel: AbstractVar["AbstractWheel"]
+    entry_angle: AbstractVar[Array]
+
+    def lowest_angle(self) -> Array:
+        """The rim angle [rad] of the front contact's deepest point (0 on a rim)."""
+        return jnp.zeros_like(self.entry_angle)
+
+    def lowest_sinkage(self) -> Array:
+        """The depth [m] of the contact's deepest point (4.6 on a rim)."""
+        return max_sinkage(self.entry_angle, self.wheel.diameter)
+
+    def rise(self, theta, theta_eff) -> Array:
+        """Height [m] above the deepest point of the point at angle theta whose stress
+        angle is theta_eff (`D sin^2(theta_eff / 2)` on a rim, measured from its lowest
+        point, free of cancellation near a base)."""
+        return self.wheel.diameter * _sincos_half(theta_eff)[0] ** 2
+
+    def normal_stress(self, sigma, theta, theta_eff) -> Array:
+        """The normal stress [Pa] at angle theta given the terrain's, sigma, at its
+        stress angle's depth (the terrain's on a rim)."""
+        return sigma
+
+    def points(self, theta, sin, cos) -> ContactPoints:
+        """The contact at angles theta [rad] with sines and cosines `sin`, `cos`."""
+        depth = _rim_sinkage_between(theta, self.entry_angle, self.wheel.diameter)
+        width = type(self.wheel).contact_width(self.wheel, depth)
+        return ContactPoints(0.0, cos, sin, 1.0, depth, width)
+
+    def moment(self, sigma, tau, theta, sin) -> Array:
+        """The stresses' moment about the axle per r [Pa] at angles theta [rad] (sines
+        `sin`): on a rim the shear stress's, whose arm is r (4.9's M_w)."""
+        return tau
+
+    def panel_ends(self, distribution, slip) -> list[Array]:
+        """Angles [rad] where the contact's shape breaks (panel ends; none on a rim)."""
+        return []
+
+    def shear_sign_change(self, exit_angle, slip, rear: bool) -> tuple[Array, Array]:
+        """(angle [rad], found): where a braked wheel's shear displacement changes sign in
+        the contact exit_angle..theta0 (`rear` False: no rear arc, the front region)."""
+        angle, found, _ = _shear_sign_change(self.entry_angle, exit_angle, slip, 12, False)
+        return angle, found
+
+    def shear_slope(self, theta, slip) -> Array:
+        """d j / d theta / r [-] at angle theta (4.10)."""
+        return _shear_displacement_slope(jnp.cos(theta), slip)
+
+    def flexing_resistance(self) -> Array:
+        """The resistance of the wheel's own deformation [N], part of the motion
+        resistance (0 for a rim)."""
+        return jnp.zeros_like(self.entry_angle)
+
+
+class RimContact(AbstractContact):
+    """The contact of a rim (circular, the thesis's, eqs. 4.5-4.10): every default of
+    `AbstractContact`."""
+
+    wheel: "AbstractWheel"
+    entry_angle: Array

@@ -15,7 +15,7 @@ import numpy as np
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
 from .distribution import AbstractStressDistribution, _is_front
-from .geometry import AbstractWheel
+from .geometry import AbstractWheel, _plain_rim
 from .shear_law import _shear_law
 
 # ---------------------------------------------------------------------------------------
@@ -288,8 +288,8 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
         )
     type(law).check(law, terrain, distribution)  # unbound: an equinox bound method is slow
-    if type(wheel).deflects and law.nodes_any_terrain is None:
+    if not _plain_rim(wheel) and law.nodes_any_terrain is None:
         raise ValueError(
             f"shear={law.name!r} ({type(law).__name__}) is derived for a rigid rim: use "
-            "shear='classic' (or 'none') with a deflecting tyre."
+            f"shear='classic' (or 'none') with a {type(wheel).__name__}."
         )

@@ -27,8 +27,7 @@ from jaxtyping import Array
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
 from .distribution import _is_front
-from .general import _layer_width, _shear_sign_change
-from .geometry import _shear_displacement_slope, _sincos_half
+from .geometry import _layer_width, _shear_displacement_slope, _shear_sign_change, _sincos_half
 from .lateral import combined_mobilisation
 
 __all__ = ["AbstractShearLaw", "JanosiHanamoto", "ThesisSimplified", "NoShear"]

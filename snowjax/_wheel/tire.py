@@ -95,7 +95,19 @@ from jaxtyping import Array, ArrayLike, Float
 from .._constants import THESIS_DIAMETER, THESIS_TIRE_WIDTH
 from .._leaves import _as_float, parameter
 from .._terrain.base import _bisect_pressure
-from .geometry import AbstractWheel, Tread, max_sinkage
+from .distribution import _is_front
+from .geometry import (
+    AbstractContact,
+    AbstractWheel,
+    ContactPoints,
+    Tread,
+    _rim_sinkage_between,
+    _shear_displacement,
+    _shear_displacement_slope,
+    _shear_sign_change,
+    _sincos_half,
+    max_sinkage,
+)
 
 __all__ = ["DeflectingTire"]
 
@@ -291,15 +303,17 @@ class DeflectingTire(AbstractWheel):
         half_angle = jnp.where(positive, 2 * jnp.arcsin(jnp.minimum(half_sin, 1.0)), 0.0)
         return Tread(half_angle, z_flat, 1 - 2 * ratio, pressure, delta)
 
+    def contact(self, entry_angle, terrain) -> "TreadContact":
+        """The contact at entry angle theta0 [rad]: the rim with the flat `tread`."""
+        return TreadContact(self, entry_angle, self.tread(entry_angle, terrain))
+
     def flat_length(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
         """l = D sin(theta_f) [m]: the length of the flat at entry angle theta0 [rad]."""
         return self.diameter * jnp.sin(self.tread(entry_angle, terrain).half_angle)
 
-    def flexing_resistance(self, tread: Tread | None) -> Array | None:
+    def flexing_resistance(self, tread: Tread) -> Array:
         """R_f = f_h p_f b l [N], l = 2 delta sqrt((D - delta) / (delta + delta_0)): the
         hard-surface rolling resistance at the deflection of `tread` (module docstring)."""
-        if tread is None:
-            return None
         delta, d = tread.deflection, self.diameter
         length = 2 * delta * jnp.sqrt((d - delta) / (delta + _DELTA_0 * d))
         return self.hard_surface_resistance * tread.pressure * self.width * length
@@ -326,3 +340,101 @@ class DeflectingTire(AbstractWheel):
     def contact_sinkage(self, entry_angle, terrain) -> Array:
         """z_f [m]: the sinkage of the flat (the rim's, eq. 4.15, in the rigid mode)."""
         return self._flat(entry_angle, terrain)[0]
+
+
+class TreadContact(AbstractContact):
+    """A deflecting tyre's contact at one entry angle (module docstring): the undeflected
+    circle's rim with the flat `tread` on |theta| < theta_f, at depth z_f, carrying p_f."""
+
+    wheel: DeflectingTire
+    entry_angle: Array
+    tread: Tread
+
+    def lowest_angle(self) -> Array:
+        """theta_f: the flat's front end."""
+        return self.tread.half_angle
+
+    def lowest_sinkage(self) -> Array:
+        """z_f, the flat's depth."""
+        return self.tread.sinkage
+
+    def _on_flat(self, theta, theta_eff):
+        half = self.tread.half_angle
+        return (jnp.abs(theta) < half) | (jnp.abs(theta_eff) < half)
+
+    def rise(self, theta, theta_eff) -> Array:
+        """Above the flat, `D sin^2(theta_eff / 2) - delta`; 0 on it, and wherever the
+        stress angle lies on it (a rear region's points mapped onto the flat)."""
+        rise = self.wheel.diameter * _sincos_half(theta_eff)[0] ** 2 - self.tread.deflection
+        return jnp.where(self._on_flat(theta, theta_eff), 0.0, jnp.maximum(rise, 0.0))
+
+    def normal_stress(self, sigma, theta, theta_eff) -> Array:
+        """p_f on the flat (the law's at z_f by construction, but not in floating point
+        where z_f rounds to a base), the terrain's elsewhere."""
+        on_flat = self._on_flat(theta, theta_eff)
+        return jnp.where(on_flat, self.tread.pressure.astype(sigma.dtype), sigma)
+
+    def points(self, theta, sin, cos) -> ContactPoints:
+        """On the flat the normal points up, (1, 0), and the length element is dx =
+        r cos(theta) d theta; the tread's travel from the entry lost to the flat, per r,
+        (theta_f - u) - (sin theta_f - sin u), u = clip(theta, -theta_f, theta_f),
+        shortens the shear displacements.  The rim's elsewhere."""
+        half = self.tread.half_angle
+        u = jnp.clip(theta, -half, half)
+        shortening = (half - u) - (jnp.sin(half) - jnp.sin(u))
+        flat = jnp.abs(theta) < half
+        one, zero = jnp.ones_like(theta), jnp.zeros_like(theta)
+        rim = _rim_sinkage_between(theta, self.entry_angle, self.wheel.diameter)
+        depth = jnp.minimum(rim, self.tread.sinkage)
+        return ContactPoints(
+            shortening,
+            jnp.where(flat, one, cos),
+            jnp.where(flat, zero, sin),
+            jnp.where(flat, cos, one),
+            depth,
+            type(self.wheel).contact_width(self.wheel, depth),
+        )
+
+    def moment(self, sigma, tau, theta, sin) -> Array:
+        """On the flat the shear stress acts cos(theta_f) r below the axle and the normal
+        stress at x = r sin theta in front of it; the rim's elsewhere."""
+        flat = jnp.abs(theta) < self.tread.half_angle
+        return jnp.where(flat, tau * self.tread.cos_half_angle + sigma * sin, tau)
+
+    def panel_ends(self, distribution, slip) -> list[Array]:
+        """The flat's ends (the normal's direction turns there; the rear end only where
+        the contact extends behind the axle) and, in a rear region, the angles whose
+        stress angle is the flat's front end (the sinkage's kink)."""
+        half, theta0 = self.tread.half_angle, self.entry_angle
+        ends = [half] if _is_front(distribution) else [half, -half]
+        return ends + list(distribution.rear_angles(half, theta0, slip))
+
+    def shear_sign_change(self, exit_angle, slip, rear: bool) -> tuple[Array, Array]:
+        """j equals the rim's on the entry arc (theta >= theta_f); on the flat it is linear
+        in sin(theta), j = j(theta_f) + i r (sin theta_f - sin theta); on the rear arc
+        (theta < -theta_f) it is the rim's less r 2 (theta_f - sin theta_f).  The first
+        root found, in that order (all per r: the root does not depend on the radius)."""
+        theta0, half = self.entry_angle, self.tread.half_angle
+        split, has_root, _ = _shear_sign_change(theta0, exit_angle, slip, 12, False)
+        on_arc = has_root & (split >= half)
+        j_f = _shear_displacement(half, theta0, slip, 1.0)
+        lo = jnp.maximum(-half, exit_angle)
+        sin_root = jnp.sin(half) + j_f / jnp.where(slip < 0, slip, -1.0)
+        on_flat = (slip < 0) & (sin_root > jnp.sin(lo)) & (sin_root < jnp.sin(half))
+        flat_root = jnp.arcsin(jnp.clip(sin_root, -1.0, 1.0))
+        angle, found = jnp.where(on_arc, split, flat_root), on_arc | on_flat
+        if not rear:
+            return angle, found
+        shortening = 2 * (half - jnp.sin(half))
+        back, back_root, _ = _shear_sign_change(theta0, exit_angle, slip, 12, False, shortening)
+        on_rear = back_root & (back < -half)
+        return jnp.where(found, angle, back), found | on_rear
+
+    def shear_slope(self, theta, slip) -> Array:
+        """On the flat dj/dx = i: dj/dtheta / r = -i cos(theta); the rim's elsewhere."""
+        rim = _shear_displacement_slope(jnp.cos(theta), slip)
+        return jnp.where(jnp.abs(theta) < self.tread.half_angle, -slip * jnp.cos(theta), rim)
+
+    def flexing_resistance(self) -> Array:
+        """R_f of the tyre at this flat (`DeflectingTire.flexing_resistance`)."""
+        return self.wheel.flexing_resistance(self.tread)
