@@ -165,22 +165,32 @@ def register(sub) -> None:
     )
     kinds = p.add_subparsers(dest="fit_kind", required=True)
 
-    def common(q):
-        q.add_argument(
-            "--data",
-            required=True,
-            type=pathlib.Path,
-            metavar="FILE.csv",
-            help="CSV file with a header line (see the column list above)",
-        )
-        q.add_argument("--json", action="store_true", help="print the result as JSON")
+    _plate_parser(kinds)
+    _tire_parser(kinds)
+    _wheel_parser(kinds)
+    p.set_defaults(run=run)
 
+
+def _common(q) -> None:
+    """The options every kind of fit has: the data file and JSON output."""
+    q.add_argument(
+        "--data",
+        required=True,
+        type=pathlib.Path,
+        metavar="FILE.csv",
+        help="CSV file with a header line (see the column list above)",
+    )
+    q.add_argument("--json", action="store_true", help="print the result as JSON")
+
+
+def _plate_parser(kinds) -> None:
+    """`snowjax fit plate`."""
     plate = kinds.add_parser(
         "plate",
         help="fit a pressure-sinkage law to plate-sinkage data",
         description=f"Fit Bekker (2.1), Wong (2.3) or Reece (2.4) to a plate test.  {_PLATE_HELP}.",
     )
-    common(plate)
+    _common(plate)
     plate.add_argument("--law", choices=("bekker", "wong", "reece"), default="bekker")
     plate.add_argument(
         "--plate-size",
@@ -203,14 +213,20 @@ def register(sub) -> None:
     )
     plate.set_defaults(run=run)
 
+
+def _tire_parser(kinds) -> None:
+    """`snowjax fit tire`."""
     tire = kinds.add_parser(
         "tire",
         help="fit the tire load functions (3.17)-(3.21)",
         description=f"Fit (3.17)-(3.21) to FEA or test data like thesis Table 3.2.  {_TIRE_HELP}.",
     )
-    common(tire)
+    _common(tire)
     tire.set_defaults(run=run)
 
+
+def _wheel_parser(kinds) -> None:
+    """`snowjax fit wheel`."""
     wheel = kinds.add_parser(
         "wheel",
         help="fit snow parameters through the wheel equilibrium (4.14)",
@@ -218,7 +234,7 @@ def register(sub) -> None:
         f"versus slip.  {_WHEEL_HELP}.  Unfitted snow parameters are held at the given "
         "values (defaults: the thesis's fresh snow).",
     )
-    common(wheel)
+    _common(wheel)
     wheel.add_argument(
         "--fit",
         default=None,
@@ -279,7 +295,6 @@ def register(sub) -> None:
     wheel.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
     wheel.add_argument("--max-steps", type=int, default=100, help="Levenberg-Marquardt steps")
     wheel.set_defaults(run=run)
-    p.set_defaults(run=run)
 
 
 def _fail(message: str) -> int:

@@ -95,6 +95,15 @@ def register(sub) -> None:
         description=(__doc__ or "").split("\n\n", 1)[1],
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
+    _model_arguments(p)
+    _run_arguments(p)
+    _distributed_arguments(p)
+    p.set_defaults(run=run)
+
+
+def _model_arguments(p) -> None:
+    """The points and the model: loads, slips, shear law, terrain and its parameters,
+    stress distribution."""
     p.add_argument("--loads", default="2000:8000:13", help="wheel loads [N] (default %(default)s)")
     p.add_argument("--slips", default="0:0.9:10", help="driving slips [-] (default %(default)s)")
     p.add_argument("--shear", choices=("classic", "simplified", "none"), default="classic")
@@ -141,6 +150,11 @@ def register(sub) -> None:
         help="stress distribution: the thesis's front region or Wong-Reece (1967) with"
         " --c1, --c2, --c3 (default %(default)s)",
     )
+
+
+def _run_arguments(p) -> None:
+    """The sweep's layout and the solver's settings: grid or list, output, chunks,
+    formats, nodes, steps, dtype, workers, progress."""
     p.add_argument(
         "--param-grid",
         action="store_true",
@@ -173,6 +187,10 @@ def register(sub) -> None:
         " per core from 1,000,000 points on, else 1)",
     )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def _distributed_arguments(p) -> None:
+    """A multi-host sweep (`jax.distributed.initialize`)."""
     p.add_argument(
         "--distributed",
         action="store_true",
@@ -190,7 +208,6 @@ def register(sub) -> None:
         help="with --distributed: a process that sends no heartbeat for this long is taken"
         " as dead and the run is stopped (default: JAX's, 100 s)",
     )
-    p.set_defaults(run=run)
 
 
 # At most this many values per list: 10^8 float64 values are 0.75 GiB before any solving.

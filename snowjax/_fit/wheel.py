@@ -426,6 +426,88 @@ def _status_warnings(status: np.ndarray, m: int) -> list[str]:
 # ---------------------------------------------------------------------------------------
 
 
+def _checked_types(wheel, snow, distribution, lateral, slip_angle):
+    """(distribution, lateral) of `fit_wheel`'s arguments, their types checked: the front
+    region as None, the lateral law `Lateral()` where a slip angle is given (None
+    without)."""
+    if not isinstance(wheel, AbstractWheel):
+        raise TypeError(
+            "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
+            f"snowjax.AbstractWheel, got {type(wheel).__name__}"
+        )
+    if not isinstance(snow, Terrain):
+        raise TypeError(
+            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
+            f"got {type(snow).__name__}"
+        )
+    if isinstance(distribution, FrontRegion):  # no leaves: the same as None
+        distribution = None
+    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
+        raise TypeError(
+            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
+            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
+        )
+    if lateral is not None and not isinstance(lateral, Lateral):
+        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    if slip_angle is not None and lateral is None:
+        lateral = Lateral()
+    if slip_angle is None:
+        lateral = None
+    return distribution, lateral
+
+
+def _fit_warnings(dtype, sol, status, m, names, targets, theta, diameter) -> list[str]:
+    """`fit_wheel`'s warnings: float32, the solver's, the data points without an
+    equilibrium (`status`), a fitted z_w [m] not below the wheel diameter [m]."""
+    warnings: list[str] = []
+    if dtype != jnp.float64:
+        warnings.append(
+            "computed in float32: enable float64 (jax_enable_x64) for reliable standard errors."
+        )
+    warnings += sol.warnings
+    warnings += _status_warnings(status, m)
+    for k, nm in enumerate(names):
+        if _field(targets[k][1]) == "z_w" and theta[k] >= diameter:
+            warnings.append(
+                f"{nm} = {theta[k]:.4g} m is not below the wheel diameter "
+                f"{diameter:g} m: the data do not reach the base, and the model gives no "
+                f"derivative with respect to {nm} there (fix {nm} or add data near the base)."
+            )
+    return warnings
+
+
+def _title(m, quantities, shear, snow, distribution) -> str:
+    """The fit's title: its points, quantities, shear law and (other than Wong snow on the
+    front region) terrain and distribution."""
+    model_txt = ""
+    if not (isinstance(snow, WongSnow) and distribution is None):
+        model_txt = f", {type(snow).__name__}" + (
+            "" if distribution is None else f" with {type(distribution).__name__}"
+        )
+    return (
+        f"Wheel calibration through the equilibrium (4.14): {m} points "
+        f"({', '.join(quantities)}), shear={shear.name!r}{model_txt}"
+    )
+
+
+def _fitted(models, start, targets, theta, dtype):
+    """(terrain, distribution, lateral law, wheel) with the fitted values `theta` at
+    `targets` and the start values elsewhere."""
+    snow, distribution, lateral, wheel = models
+    final = {o: dict(start[o]) for o in start}
+    for (owner, path), v in zip(targets, theta):
+        final[owner][path] = float(v)
+    if isinstance(snow, WongSnow):
+        fitted_snow = WongSnow(**final["terrain"])
+    else:
+        fitted_snow = _rebuild(snow, final["terrain"], dtype)
+    fitted_dist = None
+    if distribution is not None:
+        fitted_dist = _rebuild(distribution, final["distribution"], dtype)
+    fitted_lateral = None if lateral is None else _rebuild(lateral, final["lateral"], dtype)
+    return fitted_snow, fitted_dist, fitted_lateral, _rebuild(wheel, final["wheel"], dtype)
+
+
 def fit_wheel(
     wheel: AbstractWheel,
     snow: Terrain | ContactModel,
@@ -559,29 +641,7 @@ def fit_wheel(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
-    if not isinstance(wheel, AbstractWheel):
-        raise TypeError(
-            "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
-            f"snowjax.AbstractWheel, got {type(wheel).__name__}"
-        )
-    if not isinstance(snow, Terrain):
-        raise TypeError(
-            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
-            f"got {type(snow).__name__}"
-        )
-    if isinstance(distribution, FrontRegion):  # no leaves: the same as None
-        distribution = None
-    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
-        raise TypeError(
-            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
-            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
-        )
-    if lateral is not None and not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
-    if slip_angle is not None and lateral is None:
-        lateral = Lateral()
-    if slip_angle is None:
-        lateral = None
+    distribution, lateral = _checked_types(wheel, snow, distribution, lateral, slip_angle)
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
     shear_model = shear
@@ -623,18 +683,10 @@ def fit_wheel(
     u0 = np.array([
         math.log(t0) if log else 0.0 for t0, log in zip(theta0, transform.log)
     ])  # fmt: skip
-    args = (
-        wheel_a,
-        snow_a,
-        dist_a,
-        lateral_a,
-        jnp.asarray(ld, dtype),
-        jnp.asarray(sl, dtype),
-        None if sa is None else jnp.asarray(sa, dtype),
-        jnp.asarray(data, dtype),
-        jnp.asarray(scales, dtype),
-        transform.cast(dtype),
-    )
+    arrays = [jnp.asarray(x, dtype) for x in (ld, sl, data, scales)]
+    angles = None if sa is None else jnp.asarray(sa, dtype)
+    models = (wheel_a, snow_a, dist_a, lateral_a)
+    args = (*models, *arrays[:2], angles, *arrays[2:], transform.cast(dtype))
     try:
         sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
     except NonFiniteModelError as err:
@@ -642,14 +694,7 @@ def fit_wheel(
         raise NonFiniteModelError(f"fit_wheel: {err}{at_start}") from None
     pred, status = sol.aux
 
-    warnings: list[str] = []
-    if dtype != jnp.float64:
-        warnings.append(
-            "computed in float32: enable float64 (jax_enable_x64) for reliable standard errors."
-        )
-    warnings += sol.warnings
     status = np.asarray(status).astype(int)
-    warnings += _status_warnings(status, m)
     good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
     n_valid = int(good.sum()) * len(quantities)
     if n_valid < len(names):
@@ -662,35 +707,13 @@ def fit_wheel(
     rows = np.tile(good, len(quantities))
     r_used = np.where(rows, sol.residual, 0.0)
     theta = transform.values(sol.u)
-    diameter = float(wheel.diameter)
-    for k, nm in enumerate(names):
-        if _field(targets[k][1]) == "z_w" and theta[k] >= diameter:
-            warnings.append(
-                f"{nm} = {theta[k]:.4g} m is not below the wheel diameter "
-                f"{diameter:g} m: the data do not reach the base, and the model gives no "
-                f"derivative with respect to {nm} there (fix {nm} or add data near the base)."
-            )
+    warnings = _fit_warnings(dtype, sol, status, m, names, targets, theta, float(wheel.diameter))
     d = transform.jacobian(sol.u)
     part = estimate(sol.jacobian[rows], sol.residual[rows], names, theta, d, fitted=names)
 
-    final = {o: dict(start[o]) for o in start}
-    for (owner, path), v in zip(targets, theta):
-        final[owner][path] = float(v)
-    if isinstance(snow, WongSnow):
-        fitted_snow = WongSnow(**final["terrain"])
-    else:
-        fitted_snow = _rebuild(snow, final["terrain"], dtype)
-    fitted_dist = None
-    if distribution is not None:
-        fitted_dist = _rebuild(distribution, final["distribution"], dtype)
-    fitted_lateral = None if lateral is None else _rebuild(lateral, final["lateral"], dtype)
-    fitted_wheel = _rebuild(wheel, final["wheel"], dtype)
-    q_txt = ", ".join(quantities)
-    model_txt = ""
-    if not (isinstance(snow, WongSnow) and distribution is None):
-        model_txt = f", {type(snow).__name__}" + (
-            "" if distribution is None else f" with {type(distribution).__name__}"
-        )
+    fitted_snow, fitted_dist, fitted_lateral, fitted_wheel = _fitted(
+        (snow, distribution, lateral, wheel), start, targets, theta, dtype
+    )
     units = {nm: _unit(infos, t) for nm, t in zip(names, targets)}
     return fit_result(
         sol,
@@ -699,8 +722,7 @@ def fit_wheel(
         warnings=warnings,
         units=units,
         info={
-            "title": f"Wheel calibration through the equilibrium (4.14): {m} points "
-            f"({q_txt}), shear={shear.name!r}{model_txt}",
+            "title": _title(m, quantities, shear, snow, distribution),
             "snow": fitted_snow,
             "terrain": fitted_snow,
             "distribution": fitted_dist,

@@ -502,26 +502,25 @@ def fig_4_8(ctx):
 # ----------------------------------------------------------------------------------------
 
 
-@table("Tables 4.3-4.6", "Derivative tables 4.3–4.6", "derivative_tables")
-def derivative_tables(ctx: Context) -> tuple[str, list, list]:
-    """Autodiff vs the thesis's Tables 4.3-4.6: markdown section and CSV rows."""
-    g = _derivative_grid(ctx)
-    k = dv.DimensionlessConstants.thesis()
+def _rel(a, b, mask=None):
+    """Largest relative difference [-] of b from a (where `mask`)."""
+    a, b = np.asarray(a), np.asarray(b)
+    scale = np.maximum(np.abs(a), 1e-12 * np.max(np.abs(a)))
+    r = np.abs(b - a) / scale
+    if mask is not None:
+        r = np.where(np.broadcast_to(mask, r.shape), r, 0.0)
+    return float(np.max(r))
+
+
+def _interior_rows(g, k) -> list:
+    """Rows of Tables 4.3 and 4.5 over the grid of Figs 4.2-4.5: autodiff vs the printed
+    expressions (the classic model where sigma_bar < 0.95 sigma_bar_n0)."""
     sigma = g["sigma"][:, None]
     body = (g["sigma"] < 0.95 * g["s_max"])[:, None]
     slips = g["slips"][None, :]
     t43 = dv.thesis_table_4_3(sigma, slips, k)
     t45 = dv.thesis_table_4_5(sigma, slips, k)
     ad = {"classic": g["classic"], "simplified": g["simplified"]}
-
-    def rel(a, b, mask=None):
-        a, b = np.asarray(a), np.asarray(b)
-        scale = np.maximum(np.abs(a), 1e-12 * np.max(np.abs(a)))
-        r = np.abs(b - a) / scale
-        if mask is not None:
-            r = np.where(np.broadcast_to(mask, r.shape), r, 0.0)
-        return float(np.max(r))
-
     rows = []
     checks = [
         ("Table 4.3", "y1 = tan φ (1 − J_k/u_k) + T0 (T1 + T2)", "classic", "y1", t43.y1),
@@ -543,11 +542,16 @@ def derivative_tables(ctx: Context) -> tuple[str, list, list]:
     ]
     inner = (g["sigma"] > 0)[:, None]  # Table 4.5's U4/U3 is 0/0 at sigma_bar = 0
     for tab, expr, model, field, value in checks:
-        r = rel(getattr(ad[model], field), value, body if model == "classic" else inner)
+        r = _rel(getattr(ad[model], field), value, body if model == "classic" else inner)
         verdict = "exact" if r < 1e-8 else "approximation only"
         rows.append([tab, expr, model, field, r, verdict])
 
-    slip_vals = np.array(DERIVATIVE_SLIPS)
+    return rows
+
+
+def _boundary_rows(k, slip_vals) -> tuple[list, dict]:
+    """Rows of the boundary values of Tables 4.4 and 4.6 at sigma_bar = 0, and the values
+    the findings quote."""
     t44p, t44c = (
         dv.thesis_table_4_4(slip_vals, k),
         dv.thesis_table_4_4(slip_vals, k, as_printed=False),
@@ -584,8 +588,9 @@ def derivative_tables(ctx: Context) -> tuple[str, list, list]:
         ),
         ("Table 4.6", "y2 at σ̄ = 0: −U1² + 2 U1 tan φ (corrected)", a0s.y2, t46c["y2"][0], ""),
     ]
+    rows = []
     for tab, expr, auto, value, bad in bvals:
-        r = rel(auto, value)
+        r = _rel(auto, value)
         rows.append(
             [
                 tab,
@@ -596,6 +601,19 @@ def derivative_tables(ctx: Context) -> tuple[str, list, list]:
                 "exact" if r < 1e-8 else (bad or "differs"),
             ]
         )
+    quoted = {"t44p": t44p, "t46p": t46p, "a0c": a0c, "a0s": a0s}
+    return rows, quoted
+
+
+@table("Tables 4.3-4.6", "Derivative tables 4.3–4.6", "derivative_tables")
+def derivative_tables(ctx: Context) -> tuple[str, list, list]:
+    """Autodiff vs the thesis's Tables 4.3-4.6: markdown section and CSV rows."""
+    g = _derivative_grid(ctx)
+    k = dv.DimensionlessConstants.thesis()
+    slip_vals = np.array(DERIVATIVE_SLIPS)
+    boundary, quoted = _boundary_rows(k, slip_vals)
+    rows = _interior_rows(g, k) + boundary
+    t44p, t46p, a0c, a0s = (quoted[name] for name in ("t44p", "t46p", "a0c", "a0s"))
     near = g["s_max"] * (1 - 1e-10)
     a_max = dv.shear_derivatives(near, slip_vals, k, "classic")
     dz_auto = float(jax.grad(lambda s: jnp.exp(-k.c_over_p_w * s))(1.0))

@@ -290,6 +290,57 @@ class _Definition:
         return s
 
 
+def _check_points(inputs) -> None:
+    """The loads and slips: scalars or 1-D, not empty, finite and in `solve_wheel`'s
+    range; every input real."""
+    for name in ("load", "slip"):
+        x = inputs[name]
+        if x.ndim > 1:
+            raise ValueError(f"sweep: {name}s must be a scalar or 1-D, got shape {x.shape}")
+        if x.size == 0:
+            raise ValueError(f"sweep: {name}s is empty")
+    for name, x in inputs.items():
+        if not (np.issubdtype(x.dtype, np.floating) or np.issubdtype(x.dtype, np.integer)):
+            raise TypeError(f"sweep: {name} must be real numbers, got dtype {x.dtype}")
+    rules = _rules()
+    for name in ("load", "slip"):
+        x = inputs[name]
+        ok, allowed = rules[name]
+        flat = x.reshape(-1)
+        for a, b in _blocks(flat.size):
+            v = np.asarray(flat[a:b], dtype=float)
+            good = np.isfinite(v) & ok(v)
+            if not good.all():
+                j = a + int(np.argmin(good))
+                what = {"load": "loads", "slip": "slips"}.get(name, name)
+                raise ValueError(
+                    f"sweep: {what} must be finite and {allowed}; got {float(flat[j])!r}"
+                    + (f" at index {j}" if flat.size > 1 else "")
+                )
+
+
+def _shape(grid, inputs, leaves) -> tuple[int, ...]:
+    """(parameter sets, loads, slips) of a grid, (points,) of a zipped list."""
+    sizes = {name: x.size for name, x in leaves.items() if x.size > 1}
+    if grid:
+        if len(set(sizes.values())) > 1:
+            raise ValueError(
+                "sweep: the parameter leaves that vary must all have the same length (the"
+                f" number of parameter sets); got {sizes}"
+            )
+        n_sets = next(iter(sizes.values()), 1)
+        shape = (n_sets, inputs["load"].size, inputs["slip"].size)
+    else:
+        lengths = {name: x.size for name, x in inputs.items() if x.size > 1}
+        if len(set(lengths.values())) > 1:
+            raise ValueError(
+                "sweep(grid=False) zips its inputs: loads, slips and every varying parameter"
+                f" leaf must have the same length (or length 1); got {lengths}"
+            )
+        shape = (next(iter(lengths.values()), 1),)
+    return shape
+
+
 def _define(
     wheel,
     snow,
@@ -338,48 +389,9 @@ def _define(
     owners = {"wheel": wheel_leaves, "terrain": terrain_leaves, "distribution": dist_leaves}
     leaves = {name: owners[owner][path] for name, (owner, path) in names.items()}
     inputs = {"load": np.asarray(loads), "slip": np.asarray(slips), **leaves}
-    for name in ("load", "slip"):
-        x = inputs[name]
-        if x.ndim > 1:
-            raise ValueError(f"sweep: {name}s must be a scalar or 1-D, got shape {x.shape}")
-        if x.size == 0:
-            raise ValueError(f"sweep: {name}s is empty")
-    for name, x in inputs.items():
-        if not (np.issubdtype(x.dtype, np.floating) or np.issubdtype(x.dtype, np.integer)):
-            raise TypeError(f"sweep: {name} must be real numbers, got dtype {x.dtype}")
+    _check_points(inputs)
     dtype = np.dtype(jnp.result_type(float))
-    rules = _rules()
-    for name in ("load", "slip"):
-        x = inputs[name]
-        ok, allowed = rules[name]
-        flat = x.reshape(-1)
-        for a, b in _blocks(flat.size):
-            v = np.asarray(flat[a:b], dtype=float)
-            good = np.isfinite(v) & ok(v)
-            if not good.all():
-                j = a + int(np.argmin(good))
-                what = {"load": "loads", "slip": "slips"}.get(name, name)
-                raise ValueError(
-                    f"sweep: {what} must be finite and {allowed}; got {float(flat[j])!r}"
-                    + (f" at index {j}" if flat.size > 1 else "")
-                )
-    sizes = {name: x.size for name, x in leaves.items() if x.size > 1}
-    if grid:
-        if len(set(sizes.values())) > 1:
-            raise ValueError(
-                "sweep: the parameter leaves that vary must all have the same length (the"
-                f" number of parameter sets); got {sizes}"
-            )
-        n_sets = next(iter(sizes.values()), 1)
-        shape = (n_sets, inputs["load"].size, inputs["slip"].size)
-    else:
-        lengths = {name: x.size for name, x in inputs.items() if x.size > 1}
-        if len(set(lengths.values())) > 1:
-            raise ValueError(
-                "sweep(grid=False) zips its inputs: loads, slips and every varying parameter"
-                f" leaf must have the same length (or length 1); got {lengths}"
-            )
-        shape = (next(iter(lengths.values()), 1),)
+    shape = _shape(grid, inputs, leaves)
     # The wheel's, the terrain's and the distribution's own validity rules (those of
     # solve_wheel).
     _check_parameter_sets(wheel_t, wheel_leaves, lambda w, _: w.constraints(), "", "wheel")

@@ -455,28 +455,9 @@ def sweep(
         max_steps=max_steps,
         distribution=distribution,
     )
-    p_count = jax.process_count() if process_count is None else int(process_count)
-    p_index = jax.process_index() if process_index is None else int(process_index)
-    if p_count < 1 or not 0 <= p_index < p_count:
-        raise ValueError(
-            f"sweep: need 0 <= process_index < process_count, got {p_index}, {p_count}"
-        )
+    p_index, p_count = _process(process_index, process_count)
     custom = (devices, process_index, process_count, callback)
-    if workers is None:
-        objects = [
-            x
-            for tree in (wheel, snow, distribution)
-            for x in (tree if isinstance(tree, (list, tuple)) else [tree])
-        ]
-        n_workers = _default_workers(d, objects, (loads, slips), custom)
-    else:
-        n_workers = int(workers)
-    if n_workers < 1:
-        raise ValueError(f"sweep: workers must be >= 1, got {workers}")
-    if n_workers > 1 and any(x is not None for x in custom):
-        raise ValueError(
-            "sweep: workers > 1 excludes devices, process_index, process_count and callback"
-        )
+    n_workers = _worker_count(workers, d, (wheel, snow, distribution), (loads, slips), custom)
     if n_workers > 1:
         p_index, p_count = 0, n_workers
     devices = list(jax.local_devices() if devices is None else devices)
@@ -487,32 +468,8 @@ def sweep(
     digest = d.digest()
     _prepare_dir(out, d, digest, resume, tag)
 
-    # Chunks of this process: stray temporary files are left-overs of an interrupted
-    # write (only the owner writes a chunk); finished chunks are validated and kept.
     mine = [k for k in range(d.n_chunks) if _owner(k, p_count) == p_index]
-    for p in out.glob(".chunk_*.npz.tmp.*"):
-        try:
-            k = int(p.name[len(".chunk_") :].split(".")[0])
-        except ValueError:
-            continue
-        if _owner(k, p_count) == p_index:
-            p.unlink(missing_ok=True)
-    done, damaged = set(), []
-    for k in mine:
-        path = out / _chunk_name(k)
-        if path.exists():
-            if _chunk_ok(path, d, k):
-                done.add(k)
-            else:
-                damaged.append(k)
-                path.unlink()
-    if damaged:
-        warnings.warn(
-            f"sweep: {len(damaged)} incomplete or damaged chunk file(s) in {out} will be"
-            f" recomputed: {', '.join(_chunk_name(k) for k in damaged[:5])}"
-            + (" ..." if len(damaged) > 5 else ""),
-            stacklevel=2,
-        )
+    done = _chunks_on_disk(out, d, mine, p_index, p_count)
     todo = [k for k in mine if k not in done]
 
     started, affinity = [], None
@@ -577,6 +534,71 @@ def sweep(
         elapsed_s=elapsed,
         points_per_second=computed_points / solve_time if solve_time > 0 else 0.0,
     )
+
+
+def _process(process_index, process_count) -> tuple[int, int]:
+    """(this process's index, the number of processes): JAX's where not given."""
+    import jax
+
+    p_count = jax.process_count() if process_count is None else int(process_count)
+    p_index = jax.process_index() if process_index is None else int(process_index)
+    if p_count < 1 or not 0 <= p_index < p_count:
+        raise ValueError(
+            f"sweep: need 0 <= process_index < process_count, got {p_index}, {p_count}"
+        )
+    return p_index, p_count
+
+
+def _chunks_on_disk(out, d, mine, p_index, p_count) -> set[int]:
+    """This process's chunks (`mine`) already on disk and valid.
+
+    Stray temporary files are left-overs of an interrupted write (only the owner writes
+    a chunk) and are removed; damaged chunk files are removed with a warning (they will
+    be recomputed)."""
+    for p in out.glob(".chunk_*.npz.tmp.*"):
+        try:
+            k = int(p.name[len(".chunk_") :].split(".")[0])
+        except ValueError:
+            continue
+        if _owner(k, p_count) == p_index:
+            p.unlink(missing_ok=True)
+    done, damaged = set(), []
+    for k in mine:
+        path = out / _chunk_name(k)
+        if path.exists():
+            if _chunk_ok(path, d, k):
+                done.add(k)
+            else:
+                damaged.append(k)
+                path.unlink()
+    if damaged:
+        warnings.warn(
+            f"sweep: {len(damaged)} incomplete or damaged chunk file(s) in {out} will be"
+            f" recomputed: {', '.join(_chunk_name(k) for k in damaged[:5])}"
+            + (" ..." if len(damaged) > 5 else ""),
+            stacklevel=3,
+        )
+    return done
+
+
+def _worker_count(workers, d, trees, inputs, custom) -> int:
+    """The processes sharing the chunks: `workers`, or by default one per core from
+    1,000,000 points on (`_default_workers`); `ValueError` for a count below 1 or workers
+    with a custom device, process or callback setting."""
+    if workers is None:
+        objects = [
+            x for tree in trees for x in (tree if isinstance(tree, (list, tuple)) else [tree])
+        ]
+        n_workers = _default_workers(d, objects, inputs, custom)
+    else:
+        n_workers = int(workers)
+    if n_workers < 1:
+        raise ValueError(f"sweep: workers must be >= 1, got {workers}")
+    if n_workers > 1 and any(x is not None for x in custom):
+        raise ValueError(
+            "sweep: workers > 1 excludes devices, process_index, process_count and callback"
+        )
+    return n_workers
 
 
 def _compute(d, devices, out, todo, total, on_disk, progress, tag, callback, workers):

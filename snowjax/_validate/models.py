@@ -227,10 +227,18 @@ def wheel_validation_model(
     )
 
 
-def validation_models(
-    *, wheel_load: float = DEFAULT_WHEEL_LOAD, tyre_width: float = DEFAULT_TYRE_WIDTH
-) -> list[ValidationModel]:
-    """The models compared by [`snowjax.validate`][] (see the module docstring)."""
+# The order of `validate`'s table: the baseline, the empirical models, then each snow's
+# chapter-4 wheel followed by its deflecting tyre (the Bekker closed form after its wheel).
+_ORDER = (
+    "baseline", "crrel", "crrel_fit", "richmond_measured_rut", "van_es",
+    "wheel_wong_pit_predicted", "tire_wong_pit_predicted", "wheel_bekker", "bekker",
+    "wheel_wong", "tire_wong", "wheel_wong_pit", "tire_wong_pit",
+)  # fmt: skip
+
+
+def _empirical_models(w_n: float, b: float) -> list[ValidationModel]:
+    """The models of chapter 2 and CRREL's, and the baseline, at wheel load w_n [N] and
+    tyre width b [m]."""
     from .._empirical.crrel import crrel_contact_arc, crrel_wheel
     from .._empirical.models import (
         bekker_rolling_resistance,
@@ -241,17 +249,10 @@ def validation_models(
     from .._terrain.bekker import BekkerSoil
 
     lab = BekkerSoil.thesis_lab_snow()
-    w_n, b = wheel_load, tyre_width
     # Van Es's sigma_i from CRREL's rho_f = 500 kg/m^3 reached under the CIV's 103 kPa
     # with lambda = 1: sigma_i = p exp(lambda (rho_i / rho_f - 1)^2) (the compaction law
     # of `van_es_compaction_resistance`).
     sigma_i = CIV_INFLATION * math.exp((ICE_DENSITY / CIV_FINAL_DENSITY - 1) ** 2)
-
-    def wheel_model(*args, **kwargs):  # the chapter-4 wheel at this load and width
-        return wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
-
-    def n_rows(rows):
-        return len(rows["row"])
 
     def baseline(rows, grid):
         # never called: `validate` predicts each held-out row by the mean of the others.
@@ -288,7 +289,7 @@ def validation_models(
         d = 2 * float(rows["radius_m"][0])
         z = np.asarray(bekker_wheel_sinkage(w_n, d, b, lab.k_c, lab.k_phi, lab.n))
         r = np.asarray(bekker_rolling_resistance(w_n, d, b, lab.k_c, lab.k_phi, lab.n))
-        shape = (n_rows(rows), 1)
+        shape = (len(rows["row"]), 1)
         return np.broadcast_to(z, shape), np.broadcast_to(r / w_n, shape)
 
     def van_es(rows, grid):
@@ -297,12 +298,6 @@ def validation_models(
         d_c = van_es_compaction_resistance(b, h, rho0, CIV_FINAL_DENSITY, sigma_i)
         return None, np.asarray(d_c) / w_n
 
-    table41 = "c = 0.2165 p_w, tan phi = 0.0787, K = D/73.6 (Table 4.1)"
-    civ = "p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section height 0.75 b (assumed)"
-    plate_snow = (
-        f"p_w = {PLATE_RULE_P_W / 1e3:.2f} kPa (Wong's plate rule on the thesis's Table 2.1), "
-        f"z_w = h (1 - rho0 / 500) (CRREL 95-7 eq. 1, rho_f for the CIV), {table41}"
-    )
     return [
         ValidationModel(
             "baseline",
@@ -346,6 +341,30 @@ def validation_models(
             "exp(-lambda (rho_i/rho - 1)^2) reaching CRREL's rho_f = 500 kg/m^3 under the "
             "CIV's 103 kPa, lambda = 1 (the thesis's default); D_r = D_d = 0",
         ),
+        ValidationModel(
+            "bekker",
+            "Bekker closed form (2.24/2.25), the thesis's lab snow",
+            "z0 and R_c of (2.25)",
+            bekker_closed,
+            fixed="the lab snow of the row above",
+        ),
+    ]
+
+
+def _wheel_models(w_n: float, b: float) -> list[ValidationModel]:
+    """The chapter-4 wheel and the deflecting tyre on each snow of the comparison, at wheel
+    load w_n [N] and tyre width b [m]."""
+
+    def wheel_model(*args, **kwargs):  # the chapter-4 wheel at this load and width
+        return wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
+
+    table41 = "c = 0.2165 p_w, tan phi = 0.0787, K = D/73.6 (Table 4.1)"
+    civ = "p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section height 0.75 b (assumed)"
+    plate_snow = (
+        f"p_w = {PLATE_RULE_P_W / 1e3:.2f} kPa (Wong's plate rule on the thesis's Table 2.1), "
+        f"z_w = h (1 - rho0 / 500) (CRREL 95-7 eq. 1, rho_f for the CIV), {table41}"
+    )
+    return [
         wheel_model(
             "wheel_wong_pit_predicted",
             "chapter-4 wheel, Wong snow from depth and density",
@@ -374,13 +393,6 @@ def validation_models(
             "n 1.07, k_c 3.43 kN/m^(n+1), k_phi 218.8 kN/m^(n+2); unlimited depth",
             note="at 6.8 kN the wheel sinks past the 85-degree limit of the rim's geometry on "
             "this snow (the closed form below: 0.23 m, deeper than every row's snow)",
-        ),
-        ValidationModel(
-            "bekker",
-            "Bekker closed form (2.24/2.25), the thesis's lab snow",
-            "z0 and R_c of (2.25)",
-            bekker_closed,
-            fixed="the lab snow of the row above",
         ),
         wheel_model(
             "wheel_wong",
@@ -425,3 +437,12 @@ def validation_models(
             compare_to="wheel_wong_pit",
         ),
     ]
+
+
+def validation_models(
+    *, wheel_load: float = DEFAULT_WHEEL_LOAD, tyre_width: float = DEFAULT_TYRE_WIDTH
+) -> list[ValidationModel]:
+    """The models compared by [`snowjax.validate`][] (see the module docstring), in the
+    order of its table."""
+    models = _empirical_models(wheel_load, tyre_width) + _wheel_models(wheel_load, tyre_width)
+    return sorted(models, key=lambda m: _ORDER.index(m.key))
