@@ -109,9 +109,11 @@ def test_public_mujoco_api_only():
 def test_static_load_is_the_weight_share(rover):
     model, _, wheels, _ = rover
     total = sum(model.body_mass) * -model.opt.gravity[2]
-    # Measured by MuJoCo after 2 s of settling through the wheels' contact sensors.
-    np.testing.assert_allclose(wheels.static_load, total / 4, rtol=2e-4)
-    np.testing.assert_allclose(wheels.static_load, LOAD, rtol=2e-4)  # 3,500 N, as test_sim
+    # Measured by MuJoCo after 2 s of settling through the wheels' contact sensors: the
+    # front wheels carry 3499.82 N, the rear 3500.24 N, within 6.0e-5 of the weight's
+    # share and 6.8e-5 of 3,500 N.
+    np.testing.assert_allclose(wheels.static_load, total / 4, rtol=1e-4)
+    np.testing.assert_allclose(wheels.static_load, LOAD, rtol=1e-4)  # 3,500 N, as test_sim
 
 
 def test_straight_run_matches_simulate_longitudinal(from_rest):
@@ -126,10 +128,12 @@ def test_straight_run_matches_simulate_longitudinal(from_rest):
     k = int(np.argmin(np.abs(np.asarray(traj.time) - 3.0)))  # t = 3 s
     assert abs(float(traj.time[k]) - 3.0) < 1e-9
     # Steady slip: both solve T - M_w(i) = I domega/dt, m dv/dt = sum F(i).
-    np.testing.assert_allclose(slip, float(traj.slip[k, 0]), atol=1e-3)
+    # Measured: within 2.0e-4 (the front and rear wheels carry 3499.8 and 3500.2 N, as at
+    # rest, and slip 0.18338 and 0.18302 about the simulation's 0.18322 at 3,500 N).
+    np.testing.assert_allclose(slip, float(traj.slip[k, 0]), atol=4e-4)
     accel = np.diff(np.asarray(r.qvel[late, 0])) / 0.005
     sim_accel = float(np.sum(traj.drawbar_pull[k])) / float(VEHICLE.mass)
-    np.testing.assert_allclose(accel, sim_accel, rtol=2e-3)
+    np.testing.assert_allclose(accel, sim_accel, rtol=1e-3)  # measured 2.9e-5
     np.testing.assert_allclose(float(r.qvel[-1, 0]), float(traj.speed[k]), rtol=3e-2)
     assert abs(float(r.qpos[-1, 1])) < 1e-6  # no drift sideways
     assert np.all(np.abs(np.asarray(r.wheels.lateral_force)) < 1e-6)
@@ -205,7 +209,7 @@ def test_snow_never_delivers_power_and_never_pushes_a_braked_vehicle(rover, run)
         assert np.all(np.asarray(w.status) != Status.INVALID_INPUT), name
         axle = np.asarray(w.longitudinal_force * w.speed + w.lateral_force * w.lateral_speed)
         spin = np.asarray(-w.resisting_torque * w.wheel_speed)
-        assert np.all(axle + spin <= 1e-9 * (np.abs(axle) + np.abs(spin)) + 1e-9), name
+        assert np.all(axle + spin <= 1e-12 * (np.abs(axle) + np.abs(spin))), name
         assert np.all(np.isfinite(r.qpos)) and np.all(np.isfinite(r.qvel)), name
         if name != "driven":  # (the chassis origin's speed; it pitches on its springs)
             speed = np.asarray(r.qvel[::50, 0])  # every 0.25 s

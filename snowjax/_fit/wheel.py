@@ -426,27 +426,13 @@ def _status_warnings(status: np.ndarray, m: int) -> list[str]:
 # ---------------------------------------------------------------------------------------
 
 
-def _checked_types(wheel, snow, distribution, lateral, slip_angle):
-    """(distribution, lateral) of `fit_wheel`'s arguments, their types checked: the front
-    region as None, the lateral law `Lateral()` where a slip angle is given (None
-    without)."""
-    if not isinstance(wheel, AbstractWheel):
-        raise TypeError(
-            "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
-            f"snowjax.AbstractWheel, got {type(wheel).__name__}"
-        )
-    if not isinstance(snow, Terrain):
-        raise TypeError(
-            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
-            f"got {type(snow).__name__}"
-        )
+def _checked_types(wheel, snow, distribution, lateral, slip_angle, shear):
+    """(distribution, lateral) of `fit_wheel`'s arguments, their types and combination
+    checked (`_check_model`): the front region as None, the lateral law `Lateral()` where
+    a slip angle is given (None without)."""
     if isinstance(distribution, FrontRegion):  # no leaves: the same as None
         distribution = None
-    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
-        raise TypeError(
-            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
-            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
-        )
+    _check_model(wheel, snow, distribution, shear)
     if lateral is not None and not isinstance(lateral, Lateral):
         raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
     if slip_angle is not None and lateral is None:
@@ -641,11 +627,10 @@ def fit_wheel(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
-    distribution, lateral = _checked_types(wheel, snow, distribution, lateral, slip_angle)
+    distribution, lateral = _checked_types(wheel, snow, distribution, lateral, slip_angle, shear)
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
     shear_model = shear
-    _check_model(wheel, snow, distribution, shear_model)
 
     measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,
                 "motion_resistance": motion_resistance, "lateral_force": lateral_force}  # fmt: skip
