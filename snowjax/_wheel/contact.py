@@ -17,8 +17,8 @@ kink in the shear stress.  The integrals are therefore computed as
 1.  *singularity subtraction*: for every integrand f = sigma h + (smooth), the part
     `sigma (h(0) cos theta + h'(0) sin theta)` is integrated in closed form (the
     terrain's `front_rim_integrals`; h(0), h'(0) from the shear law's `mobilisation`
-    at the axle, `_axle_mobilisation`), which leaves a remainder that vanishes like theta^2 ln theta
-    at the singular end;
+    at the axle, `_axle_mobilisation`), which leaves a remainder that vanishes like
+    theta^2 ln theta at the singular end;
 2.  *graded composite Gauss–Legendre* on four panels split at the sign change of the
     shear displacement (or at theta0 / 2 when there is none; the shear law's
     `braking_panels`): a quadratic map clusters nodes at theta = 0, and sinh maps

@@ -1,12 +1,13 @@
-"""Contact integrals of a rigid wheel on any terrain law, with any stress distribution;
-the quadrature's node maps and the search for the braking sign change.
+"""Contact integrals of any wheel on any terrain law, with any stress distribution (the
+any-terrain rule), and the quadrature's node maps.
 
 `general_contact` is the rule the contact entry (`contact._contact_batch`) takes for
-every combination except a law with closed-form rim integrals (`WongSnow`) on the front
-region running straight, which takes the closed-form rule
-(`contact._closed_form_contact`); both rules build their nodes from the maps here
-(`_power_map`, `_sinh_offsets`) and find the braking sign change with
-`_shear_sign_change`.
+every combination except the plain rim (constant width) on a law with closed-form rim
+integrals (`WongSnow`) on the front region running straight, which takes the
+closed-form rule (`contact._closed_form_contact`); both rules build their nodes from the
+maps here (`_power_map`, `_sinh_offsets`) and find the braking sign change with
+`geometry._shear_sign_change`.  The wheel's geometry comes from its contact
+(`AbstractContact`: the rim's, or a tyre's flat).
 
 The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
 sinkage, shear stress by the shear law from the shear displacement 4.10) are
