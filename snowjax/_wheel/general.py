@@ -192,12 +192,11 @@ def _stresses_at(theta, theta_eff, contact, terrain, width, guard=True):
     return contact.normal_stress(sigma, theta, theta_eff), cohesion, tan_phi, modulus
 
 
-def _braking_point(slip, contact, terrain, distribution):
+def _braking_point(theta_r, slip, contact, terrain, distribution):
     """(angle, grading scale) of the panel cut at a braked wheel's sign change of the shear
     displacement (`contact.shear_sign_change`; where there is none, the middle of the
     contact and no grading), the scale the width of the shear layer there."""
     wheel, theta0 = contact.wheel, contact.entry_angle
-    theta_r = distribution.exit_angle(theta0, slip)
     split, has_root = contact.shear_sign_change(theta_r, slip, not _is_front(distribution))
     split = jax.lax.stop_gradient(jnp.where(has_root, split, 0.5 * (theta_r + theta0)))
     theta_eff = distribution.stress_angle(split, theta0, slip)
@@ -242,14 +241,14 @@ def general_contact(
     _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(
         surface, type(wheel).contact_width(wheel, surface)
     )
-    if side is not None:
-        tan_beta, k_lateral, unit_weight = side
     if side is None:
         entry_scale = law.entry_layer(theta0, slip, diameter, terrain, k_surface)
     elif not law.mobilises:
+        tan_beta, k_lateral, unit_weight = side
         entry_scale = inf
     else:
         # Width of the layer where the resultant displacement u rises to ~1.
+        tan_beta, k_lateral, unit_weight = side
         k_y = k_surface if k_lateral is None else k_lateral
         entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
         rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
@@ -265,7 +264,7 @@ def general_contact(
     if base_end is not None:
         points.append((base_end + (theta0 - base_end) * BASE_PANEL, inf))
     if braking and law.mobilises:
-        points.append(_braking_point(slip, contact, terrain, distribution))
+        points.append(_braking_point(theta_r, slip, contact, terrain, distribution))
     for breakpoint in terrain.breakpoint_sinkages():
         # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
         # and its mirror image in the rear region.
