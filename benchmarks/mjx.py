@@ -2,6 +2,7 @@
 without the snow's wheel forces.
 
     python benchmarks/mjx.py            # 1, 1,024 and 4,096 environments (minutes on 2 cores)
+    python benchmarks/mjx.py --device gpu  # also 16,384 and 65,536 environments, float32
     python benchmarks/mjx.py --quick    # fewer steps
     python benchmarks/mjx.py --no-docs
 
@@ -34,9 +35,6 @@ import time
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
 
 import jax  # noqa: E402
-
-if "--device" not in sys.argv or "cpu" in sys.argv:  # float32 on a GPU (see --device)
-    jax.config.update("jax_enable_x64", True)
 import jax.numpy as jnp  # noqa: E402
 import numpy as np  # noqa: E402
 from doc_block import add_no_docs, write_block  # noqa: E402
@@ -45,6 +43,9 @@ from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 from rich.table import Table  # noqa: E402
 from run import best_time, machine  # noqa: E402
+
+# float32 on a GPU (see --device); set after importing run.py, which turns float64 on.
+jax.config.update("jax_enable_x64", not {"gpu", "--device=gpu"} & set(sys.argv[1:]))
 
 import snowjax as sj  # noqa: E402
 from snowjax import mjx as smjx  # noqa: E402
@@ -130,6 +131,8 @@ def main(argv=None):
     n = wheels.num_wheels
     quick = args.quick
     cases = ((1, 100 if quick else 400), (1024, 3 if quick else 10), (4096, 2 if quick else 5))
+    if args.device == "gpu":  # a GPU fills at larger batches
+        cases += ((16384, 2 if quick else 5), (65536, 2 if quick else 5))
     rows = []
     for batch, steps in track(cases, description="MJX rollouts", transient=True):
         r = measure(batch, steps, m, wheels, d0)
