@@ -29,6 +29,9 @@ from ._wheel.distribution import FrontRegion as FrontRegion
 from ._wheel.distribution import WongReece as WongReece
 from ._wheel.lateral import Lateral as Lateral
 from ._wheel.model import ContactModel as ContactModel
+from ._wheel.terms import AbstractForceTerm as AbstractForceTerm
+from ._wheel.terms import ContactNodes as ContactNodes
+from ._wheel.terms import Resultants as Resultants
 from ._wheel.shear_law import AbstractShearLaw as AbstractShearLaw
 from ._wheel.shear_law import JanosiHanamoto as JanosiHanamoto
 from ._wheel.shear_law import NoShear as NoShear

@@ -12,7 +12,9 @@ the recipe of the extending guide's "Adding a terrain law, a stress distribution
 law or a wheel".  The shear law (`KondnerShear`, one method) likewise: on both contact rules, and,
 driving and braking, through `solve_wheel`, `jax.grad`, `fit_wheel`, `sweep`,
 `simulate_longitudinal`, `simulate_planar` and `snowjax.mjx.step`, against SciPy
-references (`tests/reference_terrain.py`, and `_wong_kondner` here for a slip angle).
+references (`tests/reference_terrain.py`, and `_reference_contact` here for a slip
+angle).  A wheel whose contact widens with depth (`BulgingWheel`, one method) and a force
+term (`FrontDrag`, one method) go through the same workflows.
 """
 
 from __future__ import annotations
@@ -340,9 +342,69 @@ def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
         np.testing.assert_allclose(got, exp[:3], rtol=1e-7, atol=1e-7 * exp[0])
 
 
+class FrontDrag(sj.AbstractForceTerm):
+    """A constant pressure q [Pa] against the travel on the vertical projection of the
+    front contact: Bekker's compaction resistance R_c = b * integral of p dz (Bekker 1969,
+    *Introduction to Terrain-Vehicle Systems*) with p = q, a resistance per unit sinkage
+    and width (q b z0 on a rim).  One method: its part of the resultants at the contact's
+    nodes."""
+
+    pressure: Float[Array, "..."] = eqx.field(converter=sj.as_float)
+
+    def forces(self, nodes):
+        front = jnp.where(nodes.theta > 0, nodes.sin, 0.0)
+        dz = nodes.radius * front * nodes.weight  # the depth's element along the contact
+        return sj.Resultants(motion_resistance=self.pressure * jnp.sum(nodes.points.width * dz))
+
+
+DRAG = FrontDrag(4e3)
+
+
+def test_a_force_term_defined_outside_the_package_on_both_contact_rules():
+    """`FrontDrag` (one class, public API only) in a `ContactModel`: through `solve_wheel`
+    on the new terrain (the any-terrain rule) and `contact_forces` on Wong snow's front
+    region (the closed-form rule), driving and braking, against the SciPy reference plus
+    q b z0; and d(drawbar pull)/dq by `jax.grad` against central differences of it."""
+    model = sj.ContactModel(_full(SNOW), terms=(_full(DRAG),))
+    st = sj.solve_wheel(_full(WHEEL), model, LOADS, SLIPS)
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED), st.status
+
+    def reference(k, q=4e3):
+        theta0, (_, r, t, _) = ref.solve(
+            LOADS[k], SLIPS[k], 0.736, 0.235, _hyperbolic(), 2e3, 0.2, 0.01, depth=0.25
+        )
+        return theta0, t - r - q * 0.235 * 0.368 * (1 - math.cos(theta0))
+
+    for k in range(N):
+        theta0, pull = reference(k)
+        assert float(st.entry_angle[k]) == pytest.approx(theta0, rel=1e-7)
+        assert float(st.drawbar_pull[k]) == pytest.approx(pull, rel=1e-6, abs=1e-7 * LOADS[k])
+
+    def total_pull(q):
+        drag = FrontDrag(jnp.full(N, q))
+        return jnp.sum(sj.solve_wheel(_full(WHEEL), eqx.tree_at(
+            lambda m: m.terms, model, (drag,)), LOADS, SLIPS).drawbar_pull)  # fmt: skip
+
+    h = 1.0  # [Pa]; the reference is linear in q
+    expected = sum(reference(k, 4e3 + h)[1] - reference(k, 4e3 - h)[1] for k in range(N)) / (2 * h)
+    assert float(jax.grad(total_pull)(4e3)) == pytest.approx(expected, rel=1e-7)
+
+    snow = sj.WongSnow(2e4, 0.2, 1e3, 0.3, 0.02)
+    theta0 = np.array([0.3, 0.5, 0.3, 0.5])
+    forces = sj.contact_forces(WHEEL, sj.ContactModel(snow, terms=(DRAG,)), theta0, SLIPS)
+    wong = lambda z, b: -2e4 * math.log1p(-z / 0.2)  # noqa: E731
+    for k in range(N):
+        w, r, t, _ = ref.contact(theta0[k], SLIPS[k], 0.736, 0.235, wong, 1e3, 0.3, 0.02)
+        r += 4e3 * 0.235 * 0.368 * (1 - math.cos(theta0[k]))
+        got = [forces.vertical_load[k], forces.motion_resistance[k], forces.thrust[k]]
+        np.testing.assert_allclose(got, [w, r, t], rtol=1e-7, atol=1e-7 * w)
+    with pytest.raises(TypeError, match="terms must be a tuple of snowjax.AbstractForceTerm"):
+        sj.ContactModel(snow, terms=(lambda nodes: None,))
+
+
 # --------------------------------------------------------------------------------------
-# A wheel whose contact widens with depth, and the one-method shear law, through every
-# workflow, against SciPy references written here
+# A wheel whose contact widens with depth, the one-method shear law and the force term,
+# through every workflow, against SciPy references written here
 # --------------------------------------------------------------------------------------
 
 
@@ -386,7 +448,8 @@ def _reference_contact(theta0, slip, beta, case):
     contact `case["width"](z)` wide, the normal stress `case["pressure"](z, b)`, and tau
     along the resultant of the shear displacements (4.10) and j_y = r (1 - i)(theta0 -
     theta) tan(beta) with K_y = K (`Lateral()`), g = `case["g"]` of the resultant; the
-    panels cut where j_x changes sign and graded at the entry."""
+    panels cut where j_x changes sign and graded at the entry.  `case["drag"]` q [Pa]:
+    `FrontDrag`'s resistance, q times the integral of the width over the depth."""
     from scipy import integrate, optimize
 
     r = case["diameter"] / 2
@@ -426,7 +489,9 @@ def _reference_contact(theta0, slip, beta, case):
                        epsrel=1e-12, limit=400)[0]
         for lo, hi in zip(pts[:-1], pts[1:])
     )  # fmt: skip
-    return np.array([quad(f) * r for f in fns])
+    out = np.array([quad(f) * r for f in fns])
+    out[1] += case.get("drag", 0.0) * quad(lambda t: math.sin(t)) * r  # quad weighs by b(z)
+    return out
 
 
 def _check_against_reference(case, load, slip, beta, entry_angle, drawbar_pull, lateral_force):
@@ -447,8 +512,9 @@ KONDNER = KondnerShear()
 BULGING = BulgingWheel(0.736, 0.2, 0.3)
 
 
-def _case(wheel, law, snow=FRESH):
-    """The reference's description of a (wheel, shear law) on Wong snow or Bekker soil."""
+def _case(wheel, law, snow=FRESH, terms=()):
+    """The reference's description of a (wheel, shear law, force terms) on Wong snow or
+    Bekker soil."""
     if isinstance(snow, sj.WongSnow):
         p_w, z_w = float(snow.p_w), float(snow.z_w)
         pressure = lambda z, b: -p_w * math.log1p(-z / z_w)  # noqa: E731
@@ -465,12 +531,14 @@ def _case(wheel, law, snow=FRESH):
         "c": float(snow.cohesion),
         "tan_phi": float(snow.tan_phi),
         "k": float(snow.shear_modulus),
+        "drag": sum(float(t.pressure) for t in terms),
     }
 
 
-EXTENSIONS = {
-    "kondner-shear": (sj.RigidWheel.thesis_tire(), KONDNER),
-    "bulging-wheel": (BULGING, sj.JanosiHanamoto()),
+EXTENSIONS = {  # name: (wheel, shear law, force terms)
+    "kondner-shear": (sj.RigidWheel.thesis_tire(), KONDNER, ()),
+    "bulging-wheel": (BULGING, sj.JanosiHanamoto(), ()),
+    "front-drag": (sj.RigidWheel.thesis_tire(), sj.JanosiHanamoto(), (DRAG,)),
 }
 
 
@@ -497,16 +565,17 @@ def test_a_wheel_that_widens_with_depth_matches_the_reference():
 @pytest.mark.slow  # the simulations' own compiles (make test-slow)
 @pytest.mark.parametrize("name", EXTENSIONS)
 def test_extensions_drive_and_brake_in_both_simulations(name):
-    """`KondnerShear` (one method) and `BulgingWheel` in `simulate_longitudinal` and
-    `simulate_planar`: the wheels' recorded forces, driving and braking, equal the SciPy
-    reference's at their recorded slip, slip angle and entry angle."""
-    wheel, law = EXTENSIONS[name]
-    case = _case(wheel, law)
+    """`KondnerShear` (one method), `BulgingWheel` and `FrontDrag` in
+    `simulate_longitudinal` and `simulate_planar`: the wheels' recorded forces, driving and
+    braking, equal the SciPy reference's at their recorded slip, slip angle and entry
+    angle."""
+    wheel, law, terms = EXTENSIONS[name]
+    case = _case(wheel, law, terms=terms)
+    model = sj.ContactModel(FRESH, shear=law, terms=terms)
     load = 3500.0
     vehicle = sj.Vehicle(mass=2 * load / 9.80665, wheel_inertia=1.5, wheel=wheel, num_wheels=2)
     torque = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -400.0]))
-    traj = sj.simulate_longitudinal(vehicle, FRESH, torque, 1.2, 0.05, initial_speed=2.0,
-                                    shear=law)  # fmt: skip
+    traj = sj.simulate_longitudinal(vehicle, model, torque, 1.2, 0.05, initial_speed=2.0)
     slips = np.asarray(traj.slip[:, 0])
     rows = [int(np.argmax(slips)), int(np.argmin(slips))]
     assert slips[rows[0]] > 0.05 and slips[rows[1]] < -0.05, slips  # driving and braking
@@ -518,8 +587,7 @@ def test_extensions_drive_and_brake_in_both_simulations(name):
 
     planar = sj.PlanarVehicle(1400.0, 1400.0 * (2.5**2 + 1.5**2) / 12, 1.5, wheel, 2.5, 1.5)
     drive = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -300.0]))
-    traj = sj.simulate_planar(planar, FRESH, 0.15, drive, 1.2, 0.05, initial_speed=2.0,
-                              shear=law)  # fmt: skip
+    traj = sj.simulate_planar(planar, model, 0.15, drive, 1.2, 0.05, initial_speed=2.0)
     assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
     slips = np.asarray(traj.slip)
     rows = np.array([np.argmax(slips[:, 0]), np.argmin(slips[:, 0])])
@@ -538,9 +606,9 @@ def test_extensions_drive_and_brake_in_both_simulations(name):
 @pytest.mark.slow  # an MJX step's own compile (make test-slow)
 @pytest.mark.parametrize("name", EXTENSIONS)
 def test_extensions_in_an_mjx_step(name):
-    """`KondnerShear` and `BulgingWheel` in `snowjax.mjx.step`: the shipped rover moving
-    forwards and sideways, front wheels driven and rear wheels braked; each wheel's forces
-    equal the SciPy reference's at its slip, slip angle and entry angle."""
+    """`KondnerShear`, `BulgingWheel` and `FrontDrag` in `snowjax.mjx.step`: the shipped
+    rover moving forwards and sideways, front wheels driven and rear wheels braked; each
+    wheel's forces equal the SciPy reference's at its slip, slip angle and entry angle."""
     try:
         from mujoco import mjx
 
@@ -549,20 +617,21 @@ def test_extensions_in_an_mjx_step(name):
         if os.environ.get("CI", "").lower() == "true":
             raise
         pytest.skip("the snowjax[mjx] extra is not installed")
-    wheel, law = EXTENSIONS[name]
+    wheel, law, terms = EXTENSIONS[name]
     model, wheels = smjx.load_rover(wheel=wheel)
+    contact = sj.ContactModel(FRESH, shear=law, terms=terms)
     m = mjx.put_model(model)
     d0 = mjx.make_data(m)
     radius = float(wheel.diameter) / 2
     spins = 2.0 / (radius * np.array([0.8, 0.8, 1.25, 1.25]))
     qvel = d0.qvel.at[0].set(2.0).at[1].set(0.4).at[np.asarray(wheels.dof_ids)].set(spins)
-    _, f = jax.jit(lambda d: smjx.step(m, d, wheels, FRESH, shear=law))(d0.replace(qvel=qvel))
+    _, f = jax.jit(lambda d: smjx.step(m, d, wheels, contact))(d0.replace(qvel=qvel))
     slip = np.asarray(f.slip)
     assert np.all(slip[:2] > 0.05) and np.all(slip[2:] < -0.05), slip
     assert np.all(np.abs(np.asarray(f.slip_angle)) > 1e-3)
     assert np.all(np.asarray(f.status) == sj.Status.CONVERGED)
     _check_against_reference(
-        _case(wheel, law), np.asarray(f.load), slip, np.asarray(f.slip_angle),
+        _case(wheel, law, terms=terms), np.asarray(f.load), slip, np.asarray(f.slip_angle),
         np.asarray(f.entry_angle), np.asarray(f.longitudinal_force), np.asarray(f.lateral_force),
     )  # fmt: skip
 
@@ -694,3 +763,39 @@ def test_a_wheel_that_widens_with_depth_in_grad_fit_and_sweep(tmp_path):
         sinkage, drawbar_pull = _bulging_reference(*point, flare=float(rows["flare"][i]))
         assert rows["sinkage"][i] == pytest.approx(sinkage, rel=1e-6)
         assert rows["drawbar_pull"][i] == pytest.approx(drawbar_pull, abs=1e-6 * rows["load"][i])
+
+
+@pytest.mark.slow  # a fit's and a sweep's own compiles (make test-slow)
+def test_fit_wheel_and_sweep_take_a_force_term(tmp_path):
+    """A `ContactModel` with `FrontDrag`: `fit_wheel` recovers k and K of the new terrain
+    from the SciPy reference's sinkages and drawbar pulls with the drag (driving and
+    braking points), and `sweep`'s rows equal the reference within 1e-6 of the load, the
+    term recorded in its manifest."""
+    reference = []
+    for k in range(N):
+        theta0, (_, r, t, _) = ref.solve(
+            LOADS[k], SLIPS[k], 0.736, 0.235, _hyperbolic(), 2e3, 0.2, 0.01, depth=0.25
+        )
+        sinkage = 0.368 * (1 - math.cos(theta0))
+        reference.append((sinkage, t - r - 4e3 * 0.235 * sinkage))
+    start = sj.ContactModel(HyperbolicSnow(3e5, 0.25, 2e3, 0.2, 0.02), terms=(DRAG,))
+    result = sj.fit_wheel(
+        WHEEL,
+        start,
+        LOADS,
+        SLIPS,
+        fit=("modulus", "shear_modulus"),
+        sinkage=np.array([x[0] for x in reference]),
+        drawbar_pull=np.array([x[1] for x in reference]),
+    )
+    assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
+    assert result.params["shear_modulus"] == pytest.approx(0.01, rel=1e-6)
+    model = sj.ContactModel(SNOW, terms=(DRAG,))
+    swept = sj.sweep(WHEEL, model, LOADS, SLIPS, grid=False, out=tmp_path / "sweep",
+                     progress=False, formats=("npz",))  # fmt: skip
+    rows = dict(np.load(swept.files["npz"]))
+    manifest = json.loads((tmp_path / "sweep" / "manifest.json").read_text())
+    assert manifest["definition"]["terms"] == [{"type": "FrontDrag", "values": [4e3]}]
+    for k, (sinkage, pull) in enumerate(reference):
+        assert rows["sinkage"][k] == pytest.approx(sinkage, rel=1e-6)
+        assert rows["drawbar_pull"][k] == pytest.approx(pull, abs=1e-6 * LOADS[k])

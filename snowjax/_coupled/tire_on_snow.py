@@ -13,6 +13,8 @@ of `tire_forces_on_snow`.
 
 from __future__ import annotations
 
+from typing import cast
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -208,7 +210,7 @@ def tire_forces_on_snow(
     Example: `snowjax.tire_forces_on_snow(snowjax.RigidWheel.thesis_tire(),
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
-    terrain, shear, distribution, *_ = _unpack_model(terrain, shear, distribution)
+    terrain, shear, distribution, _, _, terms = _unpack_model(terrain, shear, distribution)
     shear = _shear_law(shear)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")
@@ -225,6 +227,7 @@ def tire_forces_on_snow(
     _check("load", load, lambda x: x > 0, "a normal load > 0 N")
     if parameters is not None:
         _check_parameters(parameters)
-    state = solve_wheel(wheel, terrain, load, slip, shear, distribution=distribution)
+    model = ContactModel(cast(Terrain, terrain), distribution, shear, terms=terms)
+    state = solve_wheel(wheel, model, load, slip)
     load, slip, slip_angle = (jnp.asarray(x) for x in (load, slip, slip_angle))
     return _combine_jit(state, load, slip, slip_angle, coefficients, parameters)

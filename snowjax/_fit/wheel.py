@@ -109,7 +109,8 @@ class _WheelResidual(eqx.Module):
     targets: tuple = eqx.field(static=True, default=())
 
     def __call__(self, u, args):
-        wheel, snow, distribution, lateral, load, slip, slip_angle, data, scale, transform = args
+        wheel, snow, distribution, lateral, load, slip, slip_angle, *rest = args
+        data, scale, transform, terms = rest
         values = transform(u)
         new = {"terrain": {}, "distribution": {}, "lateral": {}, "wheel": {}}
         for i, (owner, path) in enumerate(self.targets):
@@ -120,17 +121,9 @@ class _WheelResidual(eqx.Module):
             distribution = _with_leaves(distribution, new["distribution"])
         if lateral is not None:
             lateral = _with_leaves(lateral, new["lateral"])
+        model = ContactModel(snow, distribution, self.shear, lateral, self.nodes_per_panel, terms)
         st = solve_wheel(
-            wheel,
-            snow,
-            load,
-            slip,
-            self.shear,
-            distribution=distribution,
-            slip_angle=slip_angle,
-            lateral=lateral,
-            nodes_per_panel=self.nodes_per_panel,
-            max_steps=self.solve_max_steps,
+            wheel, model, load, slip, slip_angle=slip_angle, max_steps=self.solve_max_steps
         )
         pred = jnp.stack([getattr(st, q) for q in self.quantities])
         return _masked_residual(pred, data, scale, st.status).reshape(-1), (pred, st.status)
@@ -623,7 +616,7 @@ def fit_wheel(
     compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
     a second.
     """
-    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
@@ -671,7 +664,7 @@ def fit_wheel(
     arrays = [jnp.asarray(x, dtype) for x in (ld, sl, data, scales)]
     angles = None if sa is None else jnp.asarray(sa, dtype)
     models = (wheel_a, snow_a, dist_a, lateral_a)
-    args = (*models, *arrays[:2], angles, *arrays[2:], transform.cast(dtype))
+    args = (*models, *arrays[:2], angles, *arrays[2:], transform.cast(dtype), terms)
     try:
         sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
     except NonFiniteModelError as err:

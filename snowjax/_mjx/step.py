@@ -213,10 +213,11 @@ def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
 
 def _contact_model(snow, shear, distribution, lateral):
     """The `ContactModel` of `step`'s arguments, checked (shear, lateral law)."""
-    snow, shear, distribution, lateral, nodes = _steered_model(
+    snow, shear, distribution, lateral, nodes, terms = _steered_model(
         snow, shear, distribution, lateral, None, "snowjax.mjx"
     )
-    return snow, shear, distribution, ContactModel(snow, distribution, shear, lateral, nodes)
+    model = ContactModel(snow, distribution, shear, lateral, nodes, terms)
+    return snow, shear, distribution, model
 
 
 def step(

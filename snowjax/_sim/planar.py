@@ -225,11 +225,11 @@ class SteeringProfile(eqx.Module):
 
 
 def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
-    """(terrain, shear law, distribution, lateral law, nodes per panel) of a steered
+    """(terrain, shear law, distribution, lateral law, nodes per panel, terms) of a steered
     wheel's arguments (`simulate_planar`, `snowjax.mjx`): a `ContactModel` unpacked, the
     shear law checked to have a lateral counterpart, the lateral law defaulted to
     `Lateral()` and checked.  `who` names the caller in the errors."""
-    snow, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     law = _shear_law(shear)
@@ -242,7 +242,7 @@ def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
         lateral = Lateral()
     elif not isinstance(lateral, Lateral):
         raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
-    return snow, law, distribution, lateral, nodes_per_panel
+    return snow, law, distribution, lateral, nodes_per_panel, terms
 
 
 def _check_steering_profile(profile: SteeringProfile) -> None:

@@ -310,7 +310,7 @@ def simulate_planar(
     that cannot be solved even after the retries stops the integration: `result` is set
     (no exception) and the remaining rows hold inf states.
     """
-    snow, shear, distribution, lateral, nodes_per_panel = _steered_model(
+    snow, shear, distribution, lateral, nodes_per_panel, terms = _steered_model(
         snow, shear, distribution, lateral, nodes_per_panel, "simulate_planar"
     )
     if not isinstance(vehicle, PlanarVehicle):
@@ -362,7 +362,9 @@ def simulate_planar(
     ruts = _resolved(ruts, NUM_WHEELS)
     term = _PlanarTerm(
         vehicle=vehicle,
-        contact=ContactModel(cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel),
+        contact=ContactModel(
+            cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel, terms
+        ),
         steering=steering,
         torque=torque,
         speed_eps=float(speed_eps),

@@ -441,7 +441,7 @@ def simulate_longitudinal(
     differentiated they make lineax raise on the non-finite values inside the implicit
     solves, so optimise positive parameters through their logarithms.
     """
-    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
@@ -476,7 +476,9 @@ def simulate_longitudinal(
     ruts = _resolved(ruts, n)
     term = _VehicleTerm(
         vehicle=vehicle,
-        contact=ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),
+        contact=ContactModel(
+            cast(Terrain, snow), distribution, shear, None, nodes_per_panel, terms
+        ),
         torque=torque,
         speed_eps=float(speed_eps),
         max_wheel_steps=64,

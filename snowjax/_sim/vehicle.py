@@ -347,7 +347,7 @@ def wheel_forces(
     range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
-    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
@@ -365,7 +365,7 @@ def wheel_forces(
         jnp.asarray(wheel_speed, dtype),
         jnp.asarray(load, dtype),
         wheel,
-        ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel),
+        ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel, terms),
         float(speed_eps),
         initial_entry_angle,
         int(max_steps),

@@ -178,6 +178,7 @@ class _Definition:
     terrain: Any
     distribution: Any
     names: dict[str, tuple[str, str]]  # column -> (owner, field path) of each leaf
+    terms: tuple = ()  # the model's own force terms (the same in every row)
 
     @property
     def n_chunks(self) -> int:
@@ -273,6 +274,9 @@ class _Definition:
             "chunk_size": self.chunk_size,
             "n_chunks": self.n_chunks,
             "shear": self.shear.name,
+            # A model's own force terms, by type and parameter values (none: no key, so
+            # sweeps without them keep their hash).
+            **({"terms": [_term_summary(t) for t in self.terms]} if self.terms else {}),
             "nodes_per_panel": self.nodes_per_panel,
             "max_steps": self.max_steps,
             "dtype": self.dtype.name,
@@ -341,6 +345,14 @@ def _shape(grid, inputs, leaves) -> tuple[int, ...]:
     return shape
 
 
+def _term_summary(term) -> dict[str, Any]:
+    """A force term's type and parameter values, for the manifest and the hash."""
+    import jax
+
+    leaves = jax.tree_util.tree_leaves(term)
+    return {"type": type(term).__name__, "values": [np.asarray(x).tolist() for x in leaves]}
+
+
 def _define(
     wheel,
     snow,
@@ -353,6 +365,7 @@ def _define(
     nodes_per_panel,
     max_steps,
     distribution=None,
+    terms=(),
 ):
     import jax.numpy as jnp
 
@@ -433,4 +446,5 @@ def _define(
         terrain=terrain_t,
         distribution=dist_t,
         names=names,
+        terms=tuple(terms),
     )

@@ -137,17 +137,11 @@ class _Solver:
                     for f, v in columns.items()
                 }
             wheel, terrain, distribution = self.d.build(x)
+            model = ContactModel(
+                terrain, distribution, self.d.shear, None, self.d.nodes_per_panel, self.d.terms
+            )
             states.append(
-                solve_wheel(
-                    wheel,
-                    terrain,
-                    x["load"],
-                    x["slip"],
-                    self.d.shear,
-                    distribution=distribution,
-                    nodes_per_panel=self.d.nodes_per_panel,
-                    max_steps=self.d.max_steps,
-                )
+                solve_wheel(wheel, model, x["load"], x["slip"], max_steps=self.d.max_steps)
             )
         return k, rows, n, states
 
@@ -429,7 +423,8 @@ def sweep(
     **Errors:** `ValueError` for out-of-range inputs (naming them), mismatched lengths,
     bad options, or an `out` directory holding a different sweep.
     """
-    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+    given = snow  # the workers get the arguments as given (a model, or its parts)
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
     try:
@@ -454,6 +449,7 @@ def sweep(
         nodes_per_panel=nodes_per_panel,
         max_steps=max_steps,
         distribution=distribution,
+        terms=terms,
     )
     p_index, p_count = _process(process_index, process_count)
     custom = (devices, process_index, process_count, callback)
@@ -482,17 +478,13 @@ def sweep(
     ]
     todo += theirs
     if theirs:
-        kwargs = dict(
-            shear=shear,
-            distribution=distribution,
-            out=out,
-            chunk_size=chunk_size,
-            grid=grid,
-            nodes_per_panel=nodes_per_panel,
-            max_steps=max_steps,
+        kwargs: dict[str, Any] = dict(
+            out=out, chunk_size=chunk_size, grid=grid, max_steps=max_steps
         )
+        if not isinstance(given, ContactModel):
+            kwargs.update(shear=shear, distribution=distribution, nodes_per_panel=nodes_per_panel)
         cores = _cores()
-        started = _start_workers((wheel, snow, loads, slips), kwargs, n_workers, cores)
+        started = _start_workers((wheel, given, loads, slips), kwargs, n_workers, cores)
         if len(cores) >= n_workers and hasattr(os, "sched_setaffinity"):
             affinity = os.sched_getaffinity(0)
             _pin(cores[0])

@@ -69,6 +69,7 @@ from .geometry import (
 )
 from .model import ContactModel, _unpack_model
 from .shear_law import AbstractShearLaw, ShearModel, _shear_law
+from .terms import ContactNodes, Resultants, _total
 
 # --------------------------------------------------------------------------------------
 # Geometry and stresses (pure functions of scalars or broadcastable arrays)
@@ -276,10 +277,8 @@ def _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance):
 
 
 def _closed_form_contact(
-    theta0,
+    contact,
     slip,
-    diameter,
-    width,
     terrain,
     law,
     n,
@@ -287,9 +286,11 @@ def _closed_form_contact(
     braking=True,
     vertical_only=False,
     moving_rule=False,
+    terms=(),
 ):
-    """(W, R, T, M) for scalar inputs, or W alone with `vertical_only`, by the
-    closed-form rule (a law with `front_rim_integrals` on the front region).
+    """(W, R, T, M, F_y, M_z) of a rim's `contact` (scalar inputs), or W alone with
+    `vertical_only`, by the closed-form rule (a law with `front_rim_integrals` on the
+    front region); the model's own force `terms` are summed on the rule's nodes.
 
     `moving_rule=True` moves the quadrature rule with theta0 for derivatives (values are
     unchanged): needed for second derivatives w.r.t. theta0, whose Leibniz term the
@@ -299,6 +300,8 @@ def _closed_form_contact(
     `bottomed` puts the lowest rim point on the base structurally (clearance 0);
     `braking=False` selects the two-panel rule, valid for slip >= 0 only (see `_nodes`).
     """
+    theta0 = contact.entry_angle
+    diameter, width = contact.wheel.diameter, contact.wheel.width
     r = diameter / 2
     clearance = _clearance(theta0, diameter, terrain)
     if bottomed is not None:
@@ -316,12 +319,20 @@ def _closed_form_contact(
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
     sigma = terrain.pressure_at_clearance(clearance + diameter * half_sin**2, width)
+    j = _shear_displacement(theta, theta0, slip, r, sin)
     if law.mobilises:
-        j = _shear_displacement(theta, theta0, slip, r, sin)
         g = law.mobilisation(j, terrain.shear_modulus, sigma, theta0, slip, diameter, terrain)
         tau = (terrain.cohesion + sigma * terrain.tan_phi) * g
     else:
         tau = jnp.zeros_like(sigma)
+    extra = Resultants()
+    if terms:
+        nodes = ContactNodes(
+            contact, terrain, slip, 0.0, theta, weight, sin, cos,
+            contact.points(theta, sin, cos), sigma, terrain.cohesion, terrain.tan_phi,
+            terrain.shear_modulus, j,
+        )  # fmt: skip
+        extra = _total(terms, nodes)
 
     # Singularity subtraction: every integrand is f = sigma h + smooth, h = cos theta,
     # sin theta or tan phi g (cos theta); remove sigma (h(0) cos + h'(0) sin), whose
@@ -342,11 +353,13 @@ def _closed_form_contact(
 
     w_int = integral(sig_cos + tau * sin, 1.0, tp * g0)
     if vertical_only:
-        return w_int * rb
+        return w_int * rb + extra.vertical_load
     r_int = integral(sig_sin, 0.0, 1.0)
     t_int = integral(tau * cos, tp * g0, tp * g1)
     m_int = integral(tau, tp * g0, tp * g1)
-    return w_int * rb, r_int * rb, t_int * rb, m_int * rb * r
+    zero = jnp.zeros_like(theta0)
+    own = (w_int * rb, r_int * rb, t_int * rb, m_int * rb * r, zero, zero)
+    return tuple(a + b for a, b in zip(own, extra.astuple(), strict=True))
 
 
 def contact_forces(
@@ -383,7 +396,7 @@ def contact_forces(
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
-    snow, shear, distribution, _, nodes_per_panel = _unpack_model(
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
         snow, shear, distribution, nodes_per_panel=nodes_per_panel
     )
     law = _shear_law(shear)
@@ -394,7 +407,7 @@ def contact_forces(
     closed_form = _closed_form_rule(snow, distribution, wheel)
     n = type(law).nodes(law, nodes_per_panel, closed_form)  # unbound: see inputs
     return _contact_forces_jit(
-        wheel, snow, distribution, entry_angle, slip, law, n, _layout(slip), closed_form
+        wheel, snow, distribution, terms, entry_angle, slip, law, n, _layout(slip), closed_form
     )
 
 
@@ -405,6 +418,7 @@ def _contact_batch(
     terrain,
     distribution,
     side,
+    terms,
     *,
     shear,
     n,
@@ -416,7 +430,8 @@ def _contact_batch(
     moving_rule=False,
 ):
     """Contact integrals of a flat batch (1-D leaves): W alone with `vertical_only`, else
-    (W, R, T, M, F_y, M_z) (F_y = M_z = 0 without a slip angle, `side` None).
+    (W, R, T, M, F_y, M_z) (F_y = M_z = 0 without a slip angle, `side` None, unless a
+    term gives them); `terms` the model's own force terms (a tuple, leaves 1-D).
 
     The one entry to the quadrature, for the solver and `contact_forces`.  `closed_form`
     (a law with closed-form rim integrals, `WongSnow`, on the front region, running
@@ -428,25 +443,17 @@ def _contact_batch(
     only the former (the latter's nodes move with theta0 by construction).
     """
 
-    def one(th, i, wh, tr, ds, sd, bt):
+    def one(th, i, wh, tr, ds, sd, tm, bt):
         contact = type(wh).contact(wh, th, tr)
         if closed_form:
-            out = _closed_form_contact(
-                th, i, wh.diameter, wh.width, tr, shear, n, bt, braking, vertical_only, moving_rule
+            return _closed_form_contact(
+                contact, i, tr, shear, n, bt, braking, vertical_only, moving_rule, tm
             )
-        else:
-            out = general_contact(
-                contact, i, tr, ds, shear, n, braking, vertical_only, sd, bulldozing
-            )
-        if vertical_only:
-            return out
-        # The wheel's own deformation (a tyre's hysteresis), part of the motion resistance.
-        out = (out[0], out[1] + contact.flexing_resistance(), *out[2:])
-        if sd is not None:
-            return out
-        return (*out, jnp.zeros_like(th), jnp.zeros_like(th))
+        return general_contact(
+            contact, i, tr, ds, shear, n, braking, vertical_only, sd, bulldozing, tm
+        )
 
-    return jax.vmap(one)(theta0, slip, wheel, terrain, distribution, side, bottomed)
+    return jax.vmap(one)(theta0, slip, wheel, terrain, distribution, side, terms, bottomed)
 
 
 def _layout(slip, warm_start: bool = False) -> str:
@@ -490,10 +497,10 @@ def _broadcast_leaves(*trees):
 
 @eqx.filter_jit
 def _contact_forces_jit(
-    wheel, terrain, distribution, entry_angle, slip, shear, n, layout, closed_form
+    wheel, terrain, distribution, terms, entry_angle, slip, shear, n, layout, closed_form
 ):
-    shape, _, (wheel, terrain, distribution, theta0, slip) = _broadcast_leaves(
-        wheel, terrain, distribution, entry_angle, slip
+    shape, _, (wheel, terrain, distribution, terms, theta0, slip) = _broadcast_leaves(
+        wheel, terrain, distribution, terms, entry_angle, slip
     )
 
     def forces(braking):
@@ -504,6 +511,7 @@ def _contact_forces_jit(
             terrain,
             distribution,
             None,
+            terms,
             shear=shear,
             n=n[braking],
             braking=braking,

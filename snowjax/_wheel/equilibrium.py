@@ -321,7 +321,7 @@ def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
 
 
 def _solve_layout(
-    wheel, terrain, distribution, load, slip, guess, side, *, options, braking, bulldozing
+    wheel, terrain, distribution, load, slip, guess, side, terms, *, options, braking, bulldozing
 ):
     """Equilibrium of a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
@@ -335,14 +335,15 @@ def _solve_layout(
     deep end, W < target at the shallow one; W need not be monotone in between (a braked
     wheel's backward shear pulls it down; a layered snow's crust breaks).
 
-    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`).
+    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`); `terms`
+    the model's own force terms (leaves per element).
     Returns (theta0, R, T, M, F_y, M_z, status).
     """
     shear, n, max_steps, closed_form = options
     # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
     # the solve runs on stopped copies of the inputs.
-    differentiable = (wheel, terrain, distribution, load, slip, side)
-    wheel, terrain, distribution, load, slip, side = jax.lax.stop_gradient(differentiable)
+    differentiable = (wheel, terrain, distribution, load, slip, side, terms)
+    wheel, terrain, distribution, load, slip, side, terms = jax.lax.stop_gradient(differentiable)
     tol = _tolerance(load.dtype)
     reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap, reaches_base = _entry_angle_cap(reach, wheel.diameter)
@@ -357,7 +358,8 @@ def _solve_layout(
 
     def vertical(theta0) -> Array:  # W of every element
         return cast(
-            Array, contact(theta0, slip, wheel, terrain, distribution, side, vertical_only=True)
+            Array,
+            contact(theta0, slip, wheel, terrain, distribution, side, terms, vertical_only=True),
         )
 
     start = _closed_form_start if closed_form else _scan_start
@@ -380,7 +382,7 @@ def _solve_layout(
         jnp.clip(s0, lower, upper),
         lower,
         upper,
-        (theta_cap, target, over, slip, wheel, terrain, distribution, side),
+        (theta_cap, target, over, slip, wheel, terrain, distribution, side, terms),
         tol,
         max_steps,
     )
@@ -394,13 +396,13 @@ def _solve_layout(
 
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
-    wheel, terrain, distribution, load, slip, side = differentiable
+    wheel, terrain, distribution, load, slip, side, terms = differentiable
     reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap = _entry_angle_cap(reach, wheel.diameter)[0]
     root = (
         (over, over & reaches_base),
         load,
-        (theta_cap, slip, wheel, terrain, distribution, side),
+        (theta_cap, slip, wheel, terrain, distribution, side, terms),
     )
     s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
     theta0, w, r, t, m, fy, mz = _root_outputs(s, *root, forces=forces)
@@ -482,7 +484,7 @@ def _side(valid, slip_angle, lateral):
 
 @eqx.filter_jit
 def _solve_jit(
-    wheel, terrain, distribution, load, slip, guess, slip_angle, lateral, options, layout
+    wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral, options, layout
 ):
     """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
 
@@ -490,9 +492,9 @@ def _solve_jit(
     "braking" or "auto" (`_with_rule_for`).
     """
     shear, n, max_steps, closed_form = options
-    trees = (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
+    trees = (wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral)
     shape, dtype, trees = _broadcast_leaves(*trees)
-    wheel, terrain, distribution, load, slip, guess, slip_angle, lateral = trees
+    wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral = trees
     valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
     small, large = _magnitude_window(dtype)
     for name, value, ok, _ in _side_rules(slip_angle, lateral):
@@ -516,7 +518,7 @@ def _solve_jit(
         return _with_rule_for(ops[4], shear, layout_solve, layout)
 
     theta0, r, t, m, fy, mz, status = _in_chunks(
-        solve, (wheel, terrain, distribution, load, slip, guess, side), load.shape[0]
+        solve, (wheel, terrain, distribution, load, slip, guess, side, terms), load.shape[0]
     )
     nan = jnp.asarray(jnp.nan, dtype)
     out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
@@ -651,7 +653,7 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
-    terrain, shear, distribution, lateral, nodes_per_panel = _unpack_model(
+    terrain, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
         terrain, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
     )
     shear = _shear_law(shear)
@@ -671,8 +673,9 @@ def solve_wheel(
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
             # Straight running: the solver paths without a slip angle, at the broadcast shape.
             shape = _broadcast_shape(
-                wheel, terrain, distribution, load, slip, initial_entry_angle, slip_angle
-            )
+                wheel, terrain, distribution, load, slip, initial_entry_angle, slip_angle,
+                terms=terms,
+            )  # fmt: skip
             broadcast = np.broadcast_to if not _is_traced(load) else jnp.broadcast_to
             load = broadcast(load, shape)
             slip_angle = None
@@ -687,7 +690,7 @@ def solve_wheel(
             )
     side_trees = (slip_angle, lateral)  # both None without a slip angle
     shape = _broadcast_shape(
-        wheel, terrain, distribution, load, slip, initial_entry_angle, *side_trees
+        wheel, terrain, distribution, load, slip, initial_entry_angle, *side_trees, terms=terms
     )
     if math.prod(shape) == 0:  # an empty batch: empty results, nothing to solve
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
@@ -709,6 +712,7 @@ def solve_wheel(
         wheel,
         terrain,
         distribution,
+        terms,
         load,
         slip,
         initial_entry_angle,

@@ -46,7 +46,15 @@ from .geometry import (
     _shear_displacement_slope,
     _sincos_half,
 )
-from .lateral import bulldozing_pressure
+from .terms import (
+    CombinedShear,
+    ContactNodes,
+    FlexingResistance,
+    NormalStress,
+    ShearStress,
+    SidewallBulldozing,
+    _total,
+)
 
 GRADING_POWER = 2
 # The power of the node map at a log-singular end (`_graded_half_panels`), and the share of
@@ -208,10 +216,10 @@ def _braking_point(theta_r, slip, contact, terrain, distribution):
 
 def general_contact(
     contact, slip, terrain, distribution, law, n, braking=True, vertical_only=False, side=None,
-    bulldozing=False,
+    bulldozing=False, terms=(),
 ):  # fmt: skip
-    """(W, R, T, M) of one wheel's `contact` (`AbstractContact`, scalar inputs) on any
-    terrain; W alone if `vertical_only`.
+    """(W, R, T, M, F_y, M_z) of one wheel's `contact` (`AbstractContact`, scalar inputs)
+    on any terrain; W alone if `vertical_only`.
 
     `distribution` is an `AbstractStressDistribution` (`FrontRegion`: 0..theta0;
     `WongReece`: theta_r..theta0 with the mirrored rear stresses), `law` the shear law
@@ -221,9 +229,13 @@ def general_contact(
 
     `side` is None (straight running) or `(tan(beta), K_y, gamma)` of a wheel under slip
     angle beta (`lateral.py`; K_y None: the terrain's modulus); then the shear stress is
-    the combined law and (W, R, T, M, F_y, M_z) are returned, F_y the lateral force [N]
-    and M_z the moment about the vertical through the wheel centre [N m], with the
-    sidewall bulldozing resistance if `bulldozing`.
+    the combined law, F_y the lateral force [N] and M_z the moment about the vertical
+    through the wheel centre [N m], with the sidewall bulldozing resistance if
+    `bulldozing` (F_y = M_z = 0 running straight, unless a term of `terms` gives them).
+
+    The stresses and forces are force terms (`terms.py`): the built-in ones (`_terms`)
+    and the model's own `terms` (`AbstractForceTerm`s), each given the nodes
+    (`ContactNodes`) and summed.
 
     The contact gives the geometry at every node (`contact.points`: the normal's
     direction, the length element, the width, the shortening of the shear displacement;
@@ -238,17 +250,14 @@ def general_contact(
     inf = jnp.asarray(jnp.inf, dtype)
     theta_r = distribution.exit_angle(theta0, slip)
     surface = jnp.zeros_like(theta0)
-    _, c_surface, tan_phi_surface, k_surface = terrain.rim_properties(
-        surface, type(wheel).contact_width(wheel, surface)
-    )
+    k_surface = terrain.rim_properties(surface, type(wheel).contact_width(wheel, surface))[3]
     if side is None:
         entry_scale = law.entry_layer(theta0, slip, diameter, terrain, k_surface)
     elif not law.mobilises:
-        tan_beta, k_lateral, unit_weight = side
         entry_scale = inf
     else:
         # Width of the layer where the resultant displacement u rises to ~1.
-        tan_beta, k_lateral, unit_weight = side
+        tan_beta, k_lateral, _ = side
         k_y = k_surface if k_lateral is None else k_lateral
         entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
         rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
@@ -289,39 +298,35 @@ def general_contact(
     # Normal stress: the terrain's law at the depth of the distribution's angle.
     theta_eff = distribution.stress_angle(theta, theta0, slip)
     sigma, cohesion, tan_phi, modulus = _stresses_at(theta, theta_eff, contact, terrain, at.width)
-    tau = tau_y = jnp.zeros_like(sigma)  # no shear stress (`NoShear`)
-    if law.mobilises:
+    nodes = ContactNodes(
+        contact=contact,
+        terrain=terrain,
+        slip=slip,
+        tan_slip_angle=0.0 if side is None else side[0],
+        theta=theta,
+        weight=weight,
+        sin=sin,
+        cos=cos,
+        points=at,
+        sigma=sigma,
+        cohesion=cohesion,
+        tan_phi=tan_phi,
+        modulus=modulus,
         # The rim's travel from the entry less the ground's (4.10), less what the
         # contact's shape takes from it (a tyre's flat).
-        j = _shear_displacement(theta, theta0, slip, r, sin) - r * at.shortening
-        strength = cohesion + sigma * tan_phi
-        if side is None:
-            tau = strength * law.mobilisation(j, modulus, sigma, theta0, slip, diameter, terrain)
-        else:
-            j_y = r * (1 - slip) * (theta0 - theta - at.shortening) * tan_beta
-            k_y = modulus if k_lateral is None else k_lateral
-            share_x, share_y = law.combined_mobilisation(
-                j / modulus, j_y / k_y, sigma, theta0, slip, diameter, terrain
-            )
-            tau, tau_y = strength * share_x, strength * share_y
+        shear_displacement=_shear_displacement(theta, theta0, slip, r, sin) - r * at.shortening,
+    )
+    total = _total(_terms(law, side, bulldozing) + tuple(terms), nodes)
+    return total.vertical_load if vertical_only else total.astuple()
 
-    area = weight * at.element * at.width * r  # per unit stress
-    w_int = jnp.sum((sigma * at.normal_cos + tau * at.normal_sin) * area)
-    if vertical_only:
-        return w_int
-    r_int = jnp.sum(sigma * at.normal_sin * area)
-    t_int = jnp.sum(tau * at.normal_cos * area)
-    m_int = jnp.sum(contact.moment(sigma, tau, theta, sin) * area) * r
-    if side is None:
-        return w_int, r_int, t_int, m_int
-    fy_int = jnp.sum(tau_y * area)
-    mz_int = jnp.sum(tau_y * sin * area) * r
-    if bulldozing:
-        # Side faces below the surface, of the contact's depth, length element
-        # r cos(theta) d theta, scaled by sin(beta).
-        q = bulldozing_pressure(at.depth, c_surface, tan_phi_surface, unit_weight)
-        sin_beta = tan_beta / jnp.sqrt(1 + tan_beta**2)
-        f_b = q * r * cos * weight * sin_beta
-        fy_int = fy_int + jnp.sum(f_b)
-        mz_int = mz_int + jnp.sum(f_b * r * sin)
-    return w_int, r_int, t_int, m_int, fy_int, mz_int
+
+def _terms(law, side, bulldozing) -> tuple:
+    """The built-in force terms: the normal stress, the shear law's stress (straight, or
+    combined with the lateral shear under a slip angle), the sidewall bulldozing and the
+    wheel's flexing resistance."""
+    terms: tuple = (NormalStress(), FlexingResistance())
+    if law.mobilises:
+        terms += (ShearStress(law) if side is None else CombinedShear(law, side[1]),)
+    if bulldozing and side is not None:
+        terms += (SidewallBulldozing(side[2]),)
+    return terms

@@ -111,11 +111,11 @@ def _numeric_argument(name: str, value):
 
 
 def _broadcast_shape(
-    wheel, terrain, distribution, load, slip, guess, slip_angle=None, lateral=None
+    wheel, terrain, distribution, load, slip, guess, slip_angle=None, lateral=None, terms=()
 ) -> tuple[int, ...]:
     """The broadcast shape of every input, or ValueError naming the shapes that clash."""
     leaves = jax.tree_util.tree_leaves(
-        (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral)
+        (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral, terms)
     )
     try:
         return tuple(np.broadcast_shapes(*(np.shape(x) for x in leaves)))
@@ -127,6 +127,7 @@ def _broadcast_shape(
     if slip_angle is not None:
         named["slip_angle"] = slip_angle
     trees = (("wheel", wheel), (terrain.label, terrain), ("distribution", distribution))
+    trees += tuple((f"terms[{k}]", term) for k, term in enumerate(terms))
     for label, tree in trees + (("lateral", lateral),):
         if tree is not None:
             for path, leaf in _module_leaves(tree).items():

@@ -18,6 +18,7 @@ from .._terrain.base import AbstractTerrain
 from .distribution import AbstractStressDistribution, _as_distribution, _is_front
 from .lateral import Lateral
 from .shear_law import AbstractShearLaw, _shear_law
+from .terms import AbstractForceTerm, _check_terms
 
 __all__ = ["ContactModel"]
 
@@ -50,6 +51,9 @@ class ContactModel(eqx.Module):
     - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel (static int >= 2;
       default None: the accurate defaults of `solve_wheel`); used by the functions that
       have the setting.
+    - `terms`: force terms of your own (`AbstractForceTerm`s, one method each: their
+      part of W, R, T, M, F_y, M_z at the contact's nodes), added to the built-in ones
+      (normal stress, shear, lateral shear, bulldozing, a tyre's flexing); default none.
 
     A module like the terrain: its array leaves (the terrain's and the distribution's
     parameters, `Lateral`'s moduli) broadcast, vmap and differentiate, e.g.
@@ -66,6 +70,7 @@ class ContactModel(eqx.Module):
     shear: AbstractShearLaw = eqx.field(converter=_shear_law, default="classic")
     lateral: Lateral | None = None
     nodes_per_panel: int | None = eqx.field(static=True, converter=_nodes_option, default=None)
+    terms: tuple[AbstractForceTerm, ...] = eqx.field(converter=_check_terms, default=())
 
     def __check_init__(self):
         if not isinstance(self.terrain, AbstractTerrain):
@@ -91,12 +96,13 @@ def _unpack_model(
     distribution: Any = None,
     lateral: Any = None,
     nodes_per_panel: Any = None,
-) -> tuple[Any, Any, Any, Any, Any]:
-    """(terrain, shear, distribution, lateral, nodes_per_panel) of a `ContactModel`, or the
-    arguments unchanged for a bare terrain.  `TypeError` if a model comes with any of the
-    keywords set (other than to their defaults)."""
+) -> tuple[Any, Any, Any, Any, Any, tuple]:
+    """(terrain, shear, distribution, lateral, nodes_per_panel, terms) of a
+    `ContactModel`, or the arguments unchanged (and no terms) for a bare terrain.
+    `TypeError` if a model comes with any of the keywords set (other than to their
+    defaults)."""
     if not isinstance(terrain, ContactModel):
-        return terrain, shear, distribution, lateral, nodes_per_panel
+        return terrain, shear, distribution, lateral, nodes_per_panel, ()
     given = [
         name
         for name, value, default in (
@@ -116,4 +122,11 @@ def _unpack_model(
     # The front region as None, the spelling the functions' defaults use (one compiled
     # program for both spellings).
     distribution = None if _is_front(model.distribution) else model.distribution
-    return model.terrain, model.shear, distribution, model.lateral, model.nodes_per_panel
+    return (
+        model.terrain,
+        model.shear,
+        distribution,
+        model.lateral,
+        model.nodes_per_panel,
+        model.terms,
+    )
