@@ -47,12 +47,10 @@ from .geometry import (
     _sincos_half,
 )
 from .terms import (
-    CombinedShear,
     ContactNodes,
     FlexingResistance,
-    NormalStress,
-    ShearStress,
     SidewallBulldozing,
+    TerrainStresses,
     _total,
 )
 
@@ -321,12 +319,10 @@ def general_contact(
 
 
 def _terms(law, side, bulldozing) -> tuple:
-    """The built-in force terms: the normal stress, the shear law's stress (straight, or
+    """The built-in force terms: the terrain's normal and shear stresses (straight, or
     combined with the lateral shear under a slip angle), the sidewall bulldozing and the
     wheel's flexing resistance."""
-    terms: tuple = (NormalStress(), FlexingResistance())
-    if law.mobilises:
-        terms += (ShearStress(law) if side is None else CombinedShear(law, side[1]),)
-    if bulldozing and side is not None:
-        terms += (SidewallBulldozing(side[2]),)
-    return terms
+    if side is None:
+        return (TerrainStresses(law), FlexingResistance())
+    terms = (TerrainStresses(law, side[1], combined=True), FlexingResistance())
+    return terms + ((SidewallBulldozing(side[2]),) if bulldozing else ())

@@ -1,5 +1,5 @@
-"""`ContactModel`: the terrain, stress distribution, shear law, lateral law and quadrature
-settings of the wheel–terrain contact, as one module.
+"""`ContactModel`: the terrain, stress distribution, shear law, lateral law, quadrature
+settings and force terms of your own of the wheel–terrain contact, as one module.
 
 The functions that solve or integrate the wheel's contact take a `ContactModel` in place
 of the terrain (`solve_wheel`, `contact_forces`, `wheel_forces`, both simulations,
