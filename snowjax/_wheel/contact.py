@@ -358,8 +358,8 @@ def _closed_form_contact(
     t_int = integral(tau * cos, tp * g0, tp * g1)
     m_int = integral(tau, tp * g0, tp * g1)
     zero = jnp.zeros_like(theta0)
-    own = (w_int * rb, r_int * rb, t_int * rb, m_int * rb * r, zero, zero)
-    return tuple(a + b for a, b in zip(own, extra.astuple(), strict=True))
+    own = Resultants(w_int * rb, r_int * rb, t_int * rb, m_int * rb * r, zero, zero)
+    return (own + extra).astuple()
 
 
 def contact_forces(
