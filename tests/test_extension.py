@@ -402,6 +402,42 @@ def test_a_force_term_defined_outside_the_package_on_both_contact_rules():
         sj.ContactModel(snow, terms=(lambda nodes: None,))
 
 
+class ExtraPressure(sj.AbstractForceTerm):
+    """A uniform normal stress q [Pa] over the contact (it carries part of the load)."""
+
+    pressure: Float[Array, "..."] = eqx.field(
+        converter=sj.as_float, metadata=sj.parameter("Pa", "pressure q", lower=0.0)
+    )
+
+    def forces(self, nodes):
+        return nodes.integrate(normal=self.pressure * jnp.ones_like(nodes.theta))
+
+
+def test_a_force_terms_parameters_are_checked_like_the_terrains():
+    """A NaN or out-of-range term parameter: `ValueError` naming it for concrete values;
+    under `jax.jit` `INVALID_INPUT` for that element alone, the others solved as without
+    it (the invalid element's term replaced by its `reference()`, so that it cannot upset
+    the batch's Newton iteration)."""
+    snow = sj.BekkerSoil.snow_us()
+    loads, slips = np.array([300.0, 500.0, 700.0]), np.array([0.2, -0.3, 0.5])
+
+    def solve(pressure):
+        model = sj.ContactModel(snow, terms=(ExtraPressure(pressure),))
+        return sj.solve_wheel(WHEEL, model, loads, slips)
+
+    with pytest.raises(ValueError, match=r"terms\[0\]\.pressure must be finite and >= 0"):
+        solve(np.array([1e3, np.nan, 1e3]))
+    with pytest.raises(ValueError, match=r"terms\[0\]\.pressure must be finite and >= 0"):
+        solve(np.array([1e3, -1.0, 1e3]))
+    with pytest.raises(ValueError, match=r"terms\[0\]\.pressure must be finite and real"):
+        sj.solve_wheel(WHEEL, sj.ContactModel(snow, terms=(FrontDrag(np.inf),)), 300.0, 0.2)
+    jitted = jax.jit(solve)
+    bad, good = jitted(jnp.array([1e3, jnp.nan, 1e3])), jitted(jnp.full(3, 1e3))
+    np.testing.assert_array_equal(bad.status, [0, sj.Status.INVALID_INPUT, 0])
+    np.testing.assert_array_equal(bad.drawbar_pull[::2], good.drawbar_pull[::2])
+    assert np.isnan(bad.drawbar_pull[1])
+
+
 # --------------------------------------------------------------------------------------
 # A wheel whose contact widens with depth, the one-method shear law and the force term,
 # through every workflow, against SciPy references written here

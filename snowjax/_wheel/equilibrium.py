@@ -65,6 +65,7 @@ from .model import ContactModel, _unpack_model
 from .root import _implicit_root, _root_outputs
 from .shear_law import AbstractShearLaw, _shear_law
 from .status import Status, _throw_on_failure
+from .terms import _term_rules
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -415,13 +416,14 @@ def _solve_layout(
     return theta0, r, t, m, fy, mz, status.astype(jnp.int32)
 
 
-def _safe_inputs(valid, wheel, terrain, distribution, load, slip):
+def _safe_inputs(valid, wheel, terrain, distribution, terms, load, slip):
     """Replace invalid elements by valid reference values so their (discarded) solve is finite."""
     pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
     wheel = jax.tree_util.tree_map(pick, wheel, type(wheel).reference())
     terrain = jax.tree_util.tree_map(pick, terrain, type(terrain).stand_in(terrain))
     distribution = jax.tree_util.tree_map(pick, distribution, type(distribution).reference())
-    return wheel, terrain, distribution, pick(load, 5000.0), pick(slip, 0.2)
+    terms = tuple(jax.tree_util.tree_map(pick, t, type(t).reference(t)) for t in terms)
+    return wheel, terrain, distribution, terms, pick(load, 5000.0), pick(slip, 0.2)
 
 
 def _flush_tiny_slip(slip):
@@ -497,10 +499,10 @@ def _solve_jit(
     wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral = trees
     valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
     small, large = _magnitude_window(dtype)
-    for name, value, ok, _ in _side_rules(slip_angle, lateral):
+    for name, value, ok, _ in _side_rules(slip_angle, lateral) + _term_rules(terms):
         valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
-    wheel, terrain, distribution, load, slip = _safe_inputs(
-        valid, wheel, terrain, distribution, load, slip
+    wheel, terrain, distribution, terms, load, slip = _safe_inputs(
+        valid, wheel, terrain, distribution, terms, load, slip
     )
     if closed_form:
         slip = _flush_tiny_slip(slip)
@@ -699,11 +701,12 @@ def solve_wheel(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
-    if slip_angle is not None:
+    if slip_angle is not None or terms:
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
-        side_rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
-        _check_rules(side_rules, dtype, *_magnitude_window(dtype))
+        rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
+        rules += _term_rules(jax.tree_util.tree_map(concrete, terms))
+        _check_rules(rules, dtype, *_magnitude_window(dtype))
     closed_form = slip_angle is None and _closed_form_rule(terrain, distribution, wheel)
     nodes = type(shear).nodes(shear, nodes_per_panel, closed_form)  # unbound: see inputs
     options = (shear, nodes, int(max_steps), closed_form)

@@ -22,11 +22,14 @@ heading), M_z [N m] turns the wheel about the vertical through its centre.
 from __future__ import annotations
 
 import abc
+from typing import Any
 
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike
 
+from .._leaves import _module_leaves, _parameter_infos
 from .._terrain.base import AbstractTerrain
 from .geometry import AbstractContact, ContactPoints
 from .lateral import bulldozing_pressure
@@ -147,12 +150,22 @@ class AbstractForceTerm(eqx.Module):
     stress distributed over the contact is `nodes.integrate(normal=..., shear=...,
     lateral=...)`; a lumped force is a `Resultants` of its own.  Array fields are
     parameters: they broadcast with the batch and carry gradients (`jax.grad` w.r.t. the
-    `ContactModel` that holds the term).  SI units.
+    `ContactModel` that holds the term), and are checked like the terrain's (finite, and
+    in the range of their `snowjax.parameter` metadata where they have some: a
+    `ValueError` naming `terms[k].field` for concrete values, `Status.INVALID_INPUT` under
+    `jax.jit`).  SI units.
     """
 
     @abc.abstractmethod
     def forces(self, nodes: ContactNodes) -> Resultants:
         """This term's part of the contact resultants at `nodes`."""
+
+    def reference(self) -> "AbstractForceTerm":
+        """A valid term of this kind, which stands in for invalid batch elements under
+        `jax.jit` (their results are NaN either way; a NaN parameter left in would upset
+        the batch's shared Newton iteration): every parameter 0 by default; override
+        where 0 is not valid."""
+        return jax.tree_util.tree_map(jnp.zeros_like, self)
 
 
 class TerrainStresses(AbstractForceTerm):
@@ -230,6 +243,20 @@ def _total(terms, nodes) -> Resultants:
     for term in terms:
         total = total + term.forces(nodes)
     return total
+
+
+def _term_rules(terms) -> list[tuple[str, Any, Any, str]]:
+    """Validity of the terms' parameters, as `solve_wheel`'s input rules: (name, value, ok
+    mask, allowed range) of every array leaf, from its `snowjax.parameter` metadata where
+    it has some, else finite (every rule's value is checked finite)."""
+    rules = []
+    for k, term in enumerate(terms):
+        infos = _parameter_infos(term)
+        for path, leaf in _module_leaves(term).items():
+            info = infos.get(path)
+            ok, allowed = (info.ok(leaf), info.allowed()) if info is not None else (True, "real")
+            rules.append((f"terms[{k}].{path}", leaf, ok, allowed))
+    return rules
 
 
 def _check_terms(terms) -> tuple:
