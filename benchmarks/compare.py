@@ -23,6 +23,7 @@ belongs in a commit message or the CHANGELOG, not on the documentation's pages.
 from __future__ import annotations
 
 import argparse
+import inspect
 import json
 import os
 import pathlib
@@ -107,12 +108,25 @@ def measure() -> dict[str, float]:
 
             def run(this_wheel=this_wheel, terrain=terrain, load=load, slip=slip, dist=dist,
                     angle=angle):  # fmt: skip
-                st = sj.solve_wheel(this_wheel, terrain, load, slip, distribution=dist,
-                                    slip_angle=angle)  # fmt: skip
+                st = _solve(this_wheel, terrain, dist, load, slip, angle)
                 st.entry_angle.block_until_ready()
 
             out[f"{label}, batch {n:,}"] = best(run, 30 if n == 1 else 10)
     return out
+
+
+def _solve(wheel, terrain, distribution, load, slip, slip_angle):
+    """`solve_wheel` with a distribution, in the spelling of the tree measured (revisions
+    before the contact model took a `distribution=` keyword)."""
+    import snowjax as sj  # noqa: PLC0415
+
+    if "distribution" in inspect.signature(sj.solve_wheel).parameters:
+        return sj.solve_wheel(
+            wheel, terrain, load, slip, distribution=distribution, slip_angle=slip_angle
+        )
+    return sj.solve_wheel(
+        wheel, sj.ContactModel(terrain, distribution), load, slip, slip_angle=slip_angle
+    )
 
 
 def _run_tree(tree: pathlib.Path) -> dict[str, float]:

@@ -69,7 +69,9 @@ def solve_in_chunks(wheel, snow, load, slip, shear):
     for k in range(0, n, CHUNK):
         piece = slice(k, min(k + CHUNK, n))
         take = lambda tree: jax.tree_util.tree_map(lambda x: x[piece], tree)  # noqa: E731,B023
-        st = sj.solve_wheel(take(wheel), take(snow), load[piece], slip[piece], shear=shear)
+        st = sj.solve_wheel(
+            take(wheel), sj.ContactModel(take(snow), shear=shear), load[piece], slip[piece]
+        )
         parts.append({f: np.asarray(getattr(st, f)) for f in (*FIELDS, "status")})
     return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
 
@@ -81,7 +83,9 @@ def balance(wheel, snow, load, slip, theta0, shear):
         piece = slice(k, min(k + CHUNK, load.shape[0]))
         take = lambda tree: jax.tree_util.tree_map(lambda x: x[piece], tree)  # noqa: E731,B023
         th = np.where(np.isfinite(theta0[piece]), theta0[piece], 0.1)
-        w = sj.contact_forces(take(wheel), take(snow), th, slip[piece], shear).vertical_load
+        w = sj.contact_forces(
+            take(wheel), sj.ContactModel(take(snow), shear=shear), th, slip[piece]
+        ).vertical_load
         out[piece] = np.abs(np.asarray(w) / load[piece] - 1)
     return out
 
@@ -96,7 +100,9 @@ def cost_ratio(n, shear, repeats=5):
         wheel, snow, load, slip = in_range(n, seed=7, slip=slips)
 
         def run(wheel=wheel, snow=snow, load=load, slip=slip):
-            sj.solve_wheel(wheel, snow, load, slip, shear=shear).status.block_until_ready()
+            sj.solve_wheel(
+                wheel, sj.ContactModel(snow, shear=shear), load, slip
+            ).status.block_until_ready()
 
         run()  # compile
         runs[name] = run
@@ -114,7 +120,7 @@ def gradient_check(n, shear):
     wheel, snow, load, slip = in_range(n, seed=3)
 
     def total(snow, load, slip):
-        st = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+        st = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), load, slip)
         return jnp.sum(st.drawbar_pull), st.status
 
     grads, status = jax.jit(jax.grad(total, argnums=(0, 1, 2), has_aux=True))(snow, load, slip)
@@ -128,7 +134,7 @@ def scipy_check(n, shear):
     from tests import reference as ref  # noqa: PLC0415
 
     wheel, snow, load, slip = in_range(n, seed=5)
-    st = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+    st = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), load, slip)
     worst_w, worst_z = 0.0, 0.0
     for k in np.flatnonzero(np.asarray(st.status) == Status.CONVERGED):
         args = (
@@ -170,10 +176,16 @@ def any_terrain_family(kind, family, n, seed=13):
         for k in range(0, n, CHUNK):
             take = lambda t, k=k: jax.tree_util.tree_map(lambda x: x[k : k + CHUNK], t)  # noqa: E731
             st = sj.solve_wheel(
-                take(wheel), take(terrain), load[k : k + CHUNK], slip[k : k + CHUNK],
-                distribution=take(dist) if wong_reece else None,
-                slip_angle=beta[k : k + CHUNK] if steered else None, lateral=take(lateral),
-            )  # fmt: skip
+                take(wheel),
+                sj.ContactModel(
+                    take(terrain),
+                    distribution=take(dist) if wong_reece else None,
+                    lateral=take(lateral),
+                ),
+                load[k : k + CHUNK],
+                slip[k : k + CHUNK],
+                slip_angle=beta[k : k + CHUNK] if steered else None,
+            )
             parts.append({f: np.asarray(getattr(st, f)) for f in (*ALL_FIELDS, "status")})
         states[dtype] = {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
         if dtype == np.float64:
@@ -193,7 +205,7 @@ def any_terrain_family(kind, family, n, seed=13):
         wheel, terrain, dist, load, slip = inputs64
         th = np.where(conv, st64["entry_angle"], 0.1)
         w = sj.contact_forces(
-            wheel, terrain, th, slip, distribution=dist if wong_reece else None
+            wheel, sj.ContactModel(terrain, dist if wong_reece else None), th, slip
         ).vertical_load
         worst = f"{np.max(np.abs(np.asarray(w)[conv] / load[conv] - 1)):.1e}"
     both = conv & (st32["status"] == Status.CONVERGED)
@@ -224,9 +236,11 @@ def _solve_chunks(wheel, terrain, dist, load, slip, n):
             )
         )
         st = sj.solve_wheel(
-            take(wheel), take(terrain), load[k : k + CHUNK], slip[k : k + CHUNK],
-            distribution=None if dist is None else take(dist),
-        )  # fmt: skip
+            take(wheel),
+            sj.ContactModel(take(terrain), None if dist is None else take(dist)),
+            load[k : k + CHUNK],
+            slip[k : k + CHUNK],
+        )
         parts.append({f: np.asarray(getattr(st, f)) for f in (*FIELDS, "status")})
     return {f: np.concatenate([p[f] for p in parts]) for f in parts[0]}
 

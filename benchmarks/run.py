@@ -65,7 +65,7 @@ def best_time(fn, repeats):
 
 
 def solve(load, slip, shear="classic", snow=SNOW, wheel=WHEEL):
-    st = sj.solve_wheel(wheel, snow, load, slip, shear)
+    st = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), load, slip)
     st.entry_angle.block_until_ready()
     return st
 
@@ -89,9 +89,10 @@ jax.config.update("jax_enable_x64", True)
 import snowjax as sj
 w, s = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
 load, slip = np.linspace(1e3, 9e3, 1000), np.linspace(0, 0.9, 1000)
-t = time.perf_counter(); sj.solve_wheel(w, s, load, slip, {shear!r}).entry_angle.block_until_ready()
+s = sj.ContactModel(s, shear={shear!r})
+t = time.perf_counter(); sj.solve_wheel(w, s, load, slip).entry_angle.block_until_ready()
 first = time.perf_counter() - t
-t = time.perf_counter(); sj.solve_wheel(w, s, load, slip, {shear!r}).entry_angle.block_until_ready()
+t = time.perf_counter(); sj.solve_wheel(w, s, load, slip).entry_angle.block_until_ready()
 print(first - (time.perf_counter() - t))
 """
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
@@ -472,7 +473,11 @@ def main(argv=None):
                 wheel=wheel,
             ):  # fmt: skip
                 st = sj.solve_wheel(
-                    wheel, terrain, ld, slip, distribution=dist, slip_angle=angle, lateral=lateral
+                    wheel,
+                    sj.ContactModel(terrain, distribution=dist, lateral=lateral),
+                    ld,
+                    slip,
+                    slip_angle=angle,
                 )
                 st.entry_angle.block_until_ready()
                 return st

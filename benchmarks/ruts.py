@@ -115,9 +115,15 @@ def simulation(steps, ruts):
 
     def run():
         return sj.simulate_longitudinal(
-            vehicle, SNOW, 400.0, steps * 0.01, 0.01, initial_speed=2.0, ruts=ruts,
-            save_every=steps,
-        )  # fmt: skip
+            vehicle,
+            SNOW,
+            400.0,
+            steps * 0.01,
+            0.01,
+            ruts=ruts,
+            initial=sj.InitialState(speed=2.0),
+            stepping=sj.Stepping(save_every=steps),
+        )
 
     jax.block_until_ready(run())
     return best_time(lambda: jax.block_until_ready(run()), 3) / steps

@@ -41,14 +41,14 @@ slips = np.linspace(0.0, 0.9, n_slips)  # driving slip [-]
 
 # progress=True (the default) shows a rich progress bar on a terminal; in Jupyter it
 # needs ipywidgets.
-result = sj.sweep(wheel, snow, loads, slips, out="sweep-output", chunk_size=chunk_size,
-                  progress=False)
+result = sj.sweep(wheel, snow, loads, slips, out="sweep-output", progress=False,
+                  run=sj.SweepRun(chunk_size))
 result"""),
     new_markdown_cell("""Running the same call again finds every chunk on disk (the manifest records a hash of
 the sweep definition) and computes nothing. After an interruption it would compute only the
 missing chunks; with different inputs in the same directory it refuses with a `ValueError`."""),
-    new_code_cell("""again = sj.sweep(wheel, snow, loads, slips, out="sweep-output", chunk_size=chunk_size,
-                 progress=False)
+    new_code_cell("""again = sj.sweep(wheel, snow, loads, slips, out="sweep-output", progress=False,
+                 run=sj.SweepRun(chunk_size))
 print(again)"""),
     new_markdown_cell("""## Load the results
 

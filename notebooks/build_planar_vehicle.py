@@ -46,7 +46,8 @@ A light vehicle (612 kg, 1.5 kN per wheel) on four thesis tyres (D = 0.736 m, b 
 wheelbase 2 m, track 1.4 m. Steering and torque are piecewise linear between five knots.
 `drive` runs one simulation and returns the forward-mode derivatives of the end state
 (X, Y, ψ, u) with respect to p_w, tan φ, the five steering knots, the torque and the initial
-speed and yaw rate (`adjoint=diffrax.ForwardMode()`, the cheap mode for ten parameters);
+speed and yaw rate (`Stepping(adjoint=diffrax.ForwardMode())`, the cheap mode for ten
+parameters);
 `jax.vmap` runs both snows at once, and JAX compiles the program once for everything below."""),
     new_code_cell("""wheel = sj.RigidWheel.thesis_tire()
 LOAD = 1500.0  # [N] static load per wheel
@@ -82,9 +83,8 @@ def drive(snow, x):
             sj.TorqueProfile(KNOTS, jnp.full(5, z[7])),
             T1,
             DT,
-            initial_speed=z[8],
-            initial_yaw_rate=z[9],
-            adjoint=diffrax.ForwardMode(),
+            initial=sj.InitialState(speed=z[8], yaw_rate=z[9]),
+            stepping=sj.Stepping(adjoint=diffrax.ForwardMode()),
         )
         return jnp.stack([traj.x[-1], traj.y[-1], traj.yaw[-1], traj.speed[-1]]), traj
 

@@ -54,7 +54,7 @@ print(f"p_w = {float(snow.p_w) / 1e3:.2f} kPa, z_w = {float(snow.z_w):.3f} m, "
     new_markdown_cell("""\
 ## One operating point
 
-`solve_wheel(wheel, snow, load, slip, shear="classic")` returns a `WheelState`. The
+`solve_wheel(wheel, snow, load, slip)` returns a `WheelState`. The
 `status` field says whether the equilibrium converged (`Status.CONVERGED`), or e.g. the
 wheel bottomed out on the base of the layer — never a silent NaN."""),
     new_code_cell("""\
@@ -109,8 +109,9 @@ assert abs(float(dz_dpw) / float(fd) - 1) < 1e-5"""),
     new_markdown_cell("""\
 ## Next
 
-* `shear="simplified"` uses the thesis's simplified shear model (4.13); `shear="none"`
-  ignores shear (the straight line of Fig. 4.7).
+* `sj.ContactModel(snow, shear="simplified")` in place of `snow` uses the thesis's
+  simplified shear model (4.13); `shear="none"` ignores shear (the straight line of
+  Fig. 4.7).
 * `notebooks/sensitivity_study.ipynb`: sensitivities to every snow parameter.
 * `snowjax reproduce`: every figure of the thesis, with a report."""),
 ]

@@ -78,7 +78,7 @@ seconds on a CPU; a run of the 60-step trajectory with its 8 sensitivities a fra
 second).
 
 The sensitivities come from forward-mode differentiation through the solver
-(`adjoint=diffrax.ForwardMode()`, the cheaper mode for 8 parameters). They are handed to
+(`Stepping(adjoint=diffrax.ForwardMode())`, the cheaper mode for 8 parameters). They are handed to
 optimistix as a materialised Jacobian through a `jax.custom_jvp`: optimistix's
 Levenberg–Marquardt evaluates its initial, zero-filled linearisation once, which a nested
 implicit solve (the wheel equilibrium) cannot digest."""),
@@ -90,7 +90,9 @@ implicit solve (the wheel equilibrium) cannot digest."""),
 
 def simulate(u, adjoint=None):
     torque = sj.TorqueProfile(knot_times, u[2:])
-    return sj.simulate_longitudinal(vehicle, snow_of(u), torque, T1, DT, adjoint=adjoint)
+    return sj.simulate_longitudinal(
+        vehicle, snow_of(u), torque, T1, DT, stepping=sj.Stepping(adjoint=adjoint)
+    )
 
 
 def speed_and_slip(u):
@@ -232,10 +234,10 @@ fig.tight_layout()"""),
     new_markdown_cell("""## Notes
 
 * **Reverse mode.** `jax.grad` through `simulate_longitudinal` uses
-  `diffrax.RecursiveCheckpointAdjoint` (the default `adjoint`); it gives the same gradients
+  `diffrax.RecursiveCheckpointAdjoint` (the default `Stepping.adjoint`); it gives the same gradients
   as forward mode, compiles about twice as long and is the right choice for many parameters.
 * **The model is quasi-static.** Each wheel's forces are the thesis's steady-rolling
-  equilibrium at the current slip. At speeds below `speed_eps` the regularisation, not
+  equilibrium at the current slip. At speeds below `Stepping.speed_eps` the regularisation, not
   the thesis, sets the forces: a torque below the self-propelled torque (where the drawbar
   pull vanishes) leaves the vehicle creeping slower than `speed_eps`.
 * **Other simulators.** `sj.wheel_forces(v, ω, load, wheel, snow)` is the same force

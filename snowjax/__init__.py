@@ -104,6 +104,8 @@ from ._empirical.models import bekker_wheel_sinkage as bekker_wheel_sinkage
 from ._empirical.traction import brixius as brixius
 from ._empirical.traction import brixius_wheel_numeric as brixius_wheel_numeric
 from ._empirical.traction import BrixiusTraction as BrixiusTraction
+from ._empirical.comparison import BrixiusTyre as BrixiusTyre
+from ._empirical.comparison import SnowCover as SnowCover
 from ._empirical.comparison import compare_motion_resistance as compare_motion_resistance
 from ._empirical.traction import gawwad_crolla_slip_parameters as gawwad_crolla_slip_parameters
 from ._empirical.traction import gross_traction_coefficient as gross_traction_coefficient
@@ -129,6 +131,8 @@ from ._sim.planar import SteeringProfile as SteeringProfile
 from ._sim.planar import planar_wheel_kinematics as planar_wheel_kinematics
 from ._sim.planar_stepping import simulate_planar as simulate_planar
 from ._sim.stepping import simulate_longitudinal as simulate_longitudinal
+from ._sim.options import InitialState as InitialState
+from ._sim.options import Stepping as Stepping
 from ._sim.vehicle import TorqueProfile as TorqueProfile
 from ._sim.vehicle import Trajectory as Trajectory
 from ._sim.vehicle import Vehicle as Vehicle
@@ -138,6 +142,7 @@ from ._sim.vehicle import wheel_kinematics as wheel_kinematics
 
 # --- sweeps ---
 from ._sweep.sweep import SweepResult as SweepResult
+from ._sweep.sweep import SweepRun as SweepRun
 from ._sweep.storage import iter_sweep_chunks as iter_sweep_chunks
 from ._sweep.storage import load_sweep as load_sweep
 from ._sweep.sweep import sweep as sweep

@@ -79,7 +79,7 @@ def test_equilibrium_matches_scipy_reference_and_the_stiff_limit_is_the_rim(case
     p = np.append(inflations, 1e12)[:, None]
     slip = np.asarray(SLIPS)[None, :]
     tire = _tire(p, flexing=FLEXING)
-    st = sj.solve_wheel(tire, terrain, load, slip, distribution=distribution)
+    st = sj.solve_wheel(tire, sj.ContactModel(terrain, distribution), load, slip)
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
     deflection = np.asarray(tire.deflection(st.entry_angle, terrain))
     assert deflection[:-1].min() < 1e-6 and deflection.max() > 0.01  # both modes covered
@@ -102,7 +102,7 @@ def test_equilibrium_matches_scipy_reference_and_the_stiff_limit_is_the_rim(case
             np.testing.assert_allclose(st.drawbar_pull[a, k], t - r - flexing, atol=1e-7 * r)
             np.testing.assert_allclose(st.torque[a, k], m, rtol=1e-7)
             np.testing.assert_allclose(st.sinkage[a, k], z_f, rtol=1e-7)
-    rigid = sj.solve_wheel(sj.RigidWheel(D, B), terrain, load, slip, distribution=distribution)
+    rigid = sj.solve_wheel(sj.RigidWheel(D, B), sj.ContactModel(terrain, distribution), load, slip)
     closed_form = isinstance(terrain, sj.WongSnow) and wr is None
     for field in ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque"):
         np.testing.assert_allclose(
@@ -257,7 +257,7 @@ def test_bad_tire_inputs_are_named_eagerly_and_invalid_under_jit(kwargs, message
 
 def test_the_simplified_shear_law_is_refused():
     with pytest.raises(ValueError, match="derived for a rigid rim"):
-        sj.solve_wheel(_tire(1e5), SNOW, 4000.0, 0.2, shear="simplified")
+        sj.solve_wheel(_tire(1e5), sj.ContactModel(SNOW, shear="simplified"), 4000.0, 0.2)
 
 
 def test_wheel_forces_of_a_simulation_step_are_the_tires_equilibrium():
@@ -298,15 +298,14 @@ def test_fit_wheel_recovers_the_carcass_pressure():
         soil,
         loads,
         slips,
-        sinkage=st.sinkage,
-        drawbar_pull=st.drawbar_pull,
+        {"sinkage": st.sinkage, "drawbar_pull": st.drawbar_pull},
         fit=("wheel.carcass_pressure", "tan_phi"),
     )
     np.testing.assert_allclose(result.params["wheel.carcass_pressure"], 8e3, rtol=1e-6)
     np.testing.assert_allclose(result.params["tan_phi"], float(SOIL.tan_phi), rtol=1e-6)
     np.testing.assert_allclose(result.info["wheel"].carcass_pressure, 8e3, rtol=1e-6)
     with pytest.raises(ValueError, match="wheel.carcass_pressure"):
-        sj.fit_wheel(start, soil, loads, slips, sinkage=st.sinkage, fit=("wheel.nonsense",))
+        sj.fit_wheel(start, soil, loads, slips, {"sinkage": st.sinkage}, fit=("wheel.nonsense",))
 
 
 @pytest.mark.slow

@@ -33,8 +33,8 @@ def test_a_stiff_tyre_on_the_base_of_wong_snow_is_the_rim():
     layer carries): a 1e12 Pa tyre rests on the base like the rim, with the rim's
     forces (the audit: it deflected 84 mm, R 607 N against the rim's 361 N)."""
     wr = sj.WongReece.reference()
-    rim = sj.solve_wheel(RIM, PLATE_SNOW, 3000.0, 0.2, distribution=wr)
-    stiff = sj.solve_wheel(_tire(1e12), PLATE_SNOW, 3000.0, 0.2, distribution=wr)
+    rim = sj.solve_wheel(RIM, sj.ContactModel(PLATE_SNOW, wr), 3000.0, 0.2)
+    stiff = sj.solve_wheel(_tire(1e12), sj.ContactModel(PLATE_SNOW, wr), 3000.0, 0.2)
     assert int(rim.status) == int(stiff.status) == Status.BOTTOMED_OUT
     assert float(_tire(1e12).deflection(stiff.entry_angle, PLATE_SNOW)) < 1e-9
     for name in FIELDS:

@@ -535,10 +535,18 @@ def test_comparison_includes_rigid_wheel_when_available(comparison):
 def test_comparison_brixius_column():
     loads = np.array([1e3, 3.5e3, 7.5e3])  # the fixture's loads: the solver is compiled once
     table, _ = sj.compare_motion_resistance(
-        loads, cone_index=200e3, section_height=0.17625, deflection=0.02
+        loads, brixius=sj.BrixiusTyre(cone_index=200e3, section_height=0.17625, deflection=0.02)
     )
     for w, got in zip(loads, table["brixius"]):
         n_b = 200e3 * B * D / w * (1 + 5 * 0.02 / 0.17625) / (1 + 3 * B / D)
         assert got == pytest.approx((1 / n_b + 0.04) * w, rel=1e-12)
-    with pytest.raises(ValueError, match="`section_height`"):
+    with pytest.raises(TypeError, match=r"cone_index=...\) is now spelled brixius=BrixiusTyre"):
         sj.compare_motion_resistance(loads, cone_index=200e3)
+    # Another snow cover: Richmond's resistance at its density, Van Es at its depth.
+    cover = sj.SnowCover(density=250.0, depth=0.3)
+    other, _ = sj.compare_motion_resistance(loads, cover=cover)
+    arc = other["contact_length"]
+    np.testing.assert_allclose(other["richmond"], sj.richmond_resistance(250.0, arc, B), rtol=1e-12)
+    assert np.all(other["van_es"] != table["van_es"])
+    with pytest.raises(TypeError, match=r"density=...\) is now spelled cover=SnowCover"):
+        sj.compare_motion_resistance(loads, density=250.0)

@@ -120,7 +120,7 @@ def _full(tree):
 
 
 def _solve(snow=SNOW, distribution=REAR, loads=LOADS):
-    return sj.solve_wheel(_full(WHEEL), _full(snow), loads, SLIPS, distribution=distribution)
+    return sj.solve_wheel(_full(WHEEL), sj.ContactModel(_full(snow), distribution), loads, SLIPS)
 
 
 @pytest.mark.parametrize("distribution", [None, REAR], ids=["front-region", "linear-rear"])
@@ -173,7 +173,7 @@ def test_bad_values_are_named_with_the_unit_and_range_of_the_field():
     with pytest.raises(ValueError, match=r"terrain\.modulus must be finite and > 0 Pa/m"):
         sj.solve_wheel(WHEEL, HyperbolicSnow(-1.0, 0.25, 2e3, 0.2, 0.01), 1000.0, 0.1)
     with pytest.raises(ValueError, match=r"distribution\.rear must be finite and in \(0, 1\)"):
-        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, distribution=LinearRear(1.5))
+        sj.solve_wheel(WHEEL, sj.ContactModel(SNOW, LinearRear(1.5)), 1000.0, 0.1)
 
 
 @pytest.mark.slow  # a fit's own compiles (make test-slow)
@@ -185,13 +185,11 @@ def test_fit_wheel_recovers_both_new_classes_parameters():
     )  # fmt: skip
     result = sj.fit_wheel(
         WHEEL,
-        start,
+        sj.ContactModel(start, LinearRear(0.5)),
         LOADS,
         SLIPS,
+        {"sinkage": np.asarray(st.sinkage), "drawbar_pull": np.asarray(st.drawbar_pull)},
         fit=("modulus", "rear"),
-        sinkage=np.asarray(st.sinkage),
-        drawbar_pull=np.asarray(st.drawbar_pull),
-        distribution=LinearRear(0.5),
     )
     assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
     assert result.params["rear"] == pytest.approx(0.3, rel=1e-6)
@@ -200,9 +198,8 @@ def test_fit_wheel_recovers_both_new_classes_parameters():
         sj.ContactModel(start, LinearRear(0.5)),
         LOADS,
         SLIPS,
+        {"sinkage": np.asarray(st.sinkage), "drawbar_pull": np.asarray(st.drawbar_pull)},
         fit=("modulus", "rear"),
-        sinkage=np.asarray(st.sinkage),
-        drawbar_pull=np.asarray(st.drawbar_pull),
     )
     assert by_model.params == result.params
     # From the fields' metadata: units, and log space for the two positive parameters.
@@ -213,12 +210,12 @@ def test_fit_wheel_recovers_both_new_classes_parameters():
 @pytest.mark.slow  # a sweep's own compiles (make test-slow)
 def test_sweep_rows_equal_solve_wheel(tmp_path):
     snows = [SNOW, eqx.tree_at(lambda s: s.modulus, SNOW, 5e5)]
+    stacked = jax.tree_util.tree_map(lambda *x: np.stack(x), *snows)  # 1-D leaves: two sets
     result = sj.sweep(
         WHEEL,
-        snows,
+        sj.ContactModel(stacked, REAR),
         np.array([1500.0, 3000.0]),
         np.array([0.1, -0.2]),
-        distribution=REAR,
         out=tmp_path / "sweep",
         progress=False,
         formats=("npz",),
@@ -228,10 +225,9 @@ def test_sweep_rows_equal_solve_wheel(tmp_path):
     assert len(rows["load"]) == 8
     st = sj.solve_wheel(
         WHEEL,
-        HyperbolicSnow(rows["modulus"], 0.25, 2e3, 0.2, 0.01),
+        sj.ContactModel(HyperbolicSnow(rows["modulus"], 0.25, 2e3, 0.2, 0.01), REAR),
         rows["load"],
         rows["slip"],
-        distribution=REAR,
     )
     np.testing.assert_allclose(rows["sinkage"], st.sinkage, rtol=1e-12)
     np.testing.assert_allclose(rows["drawbar_pull"], st.drawbar_pull, rtol=1e-10, atol=1e-9)
@@ -242,18 +238,21 @@ def test_shear_laws_are_modules_or_their_names():
     what it needs (the thesis's simplified law: Wong snow on the front region)."""
     by_name = _solve(distribution=_full(REAR))
     by_module = sj.solve_wheel(
-        _full(WHEEL), _full(SNOW), LOADS, SLIPS, sj.JanosiHanamoto(), distribution=_full(REAR)
+        _full(WHEEL),
+        sj.ContactModel(_full(SNOW), distribution=_full(REAR), shear=sj.JanosiHanamoto()),
+        LOADS,
+        SLIPS,
     )
     np.testing.assert_array_equal(by_name.drawbar_pull, by_module.drawbar_pull)
     assert sj.NoShear().name == "none" and sj.ThesisSimplified().name == "simplified"
     with pytest.raises(ValueError, match="needs a WongSnow terrain"):
-        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, sj.ThesisSimplified())
+        sj.solve_wheel(WHEEL, sj.ContactModel(SNOW, shear=sj.ThesisSimplified()), 1000.0, 0.1)
     with pytest.raises(ValueError, match="shear must be one of"):
-        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, "wet")
+        sj.solve_wheel(WHEEL, sj.ContactModel(SNOW, shear="wet"), 1000.0, 0.1)
     fresh = sj.WongSnow.thesis_fresh_snow()
-    thesis = sj.solve_wheel(WHEEL, fresh, 3000.0, 0.2, sj.ThesisSimplified())
+    thesis = sj.solve_wheel(WHEEL, sj.ContactModel(fresh, shear=sj.ThesisSimplified()), 3000.0, 0.2)
     assert float(thesis.drawbar_pull) == float(
-        sj.solve_wheel(WHEEL, fresh, 3000.0, 0.2, "simplified").drawbar_pull
+        sj.solve_wheel(WHEEL, sj.ContactModel(fresh, shear="simplified"), 3000.0, 0.2).drawbar_pull
     )
 
 
@@ -269,7 +268,7 @@ def test_a_contact_model_bundles_terrain_distribution_and_shear_law():
     forces = sj.contact_forces(WHEEL, model, by_model.entry_angle, SLIPS)
     np.testing.assert_array_equal(
         forces.vertical_load,
-        sj.contact_forces(WHEEL, _full(SNOW), by_model.entry_angle, SLIPS, distribution=REAR)
+        sj.contact_forces(WHEEL, sj.ContactModel(_full(SNOW), REAR), by_model.entry_angle, SLIPS)
         .vertical_load,
     )  # fmt: skip
     np.testing.assert_allclose(forces.vertical_load, LOADS, rtol=1e-8)
@@ -295,8 +294,13 @@ def test_a_contact_model_bundles_terrain_distribution_and_shear_law():
         sj.ContactModel(SNOW, shear=sj.ThesisSimplified())
     with pytest.raises(TypeError, match="ContactModel.terrain must be a snowjax.Terrain"):
         sj.ContactModel(REAR)
-    with pytest.raises(TypeError, match="shear, nodes_per_panel given both"):
-        sj.solve_wheel(WHEEL, model, 1000.0, 0.1, "none", nodes_per_panel=12)
+    # The model's parts are not keywords of the functions: the error names the model.
+    with pytest.raises(TypeError, match=r"solve_wheel\(shear=...\) is now spelled ContactModel"):
+        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, shear="none")
+    with pytest.raises(TypeError, match="takes 4 positional arguments, got 5: .*ContactModel"):
+        sj.solve_wheel(WHEEL, SNOW, 1000.0, 0.1, "none")
+    with pytest.raises(TypeError, match=r"contact_forces\(nodes_per_panel=...\) is now spelled"):
+        sj.contact_forces(WHEEL, model, 0.3, 0.1, nodes_per_panel=12)
     with pytest.raises(ValueError, match="nodes_per_panel must be >= 2"):
         sj.ContactModel(SNOW, nodes_per_panel=1)
 
@@ -320,7 +324,7 @@ def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
     the SciPy reference with the same mobilisation; driving and braking."""
     law = KondnerShear()
     kondner = lambda x: x / (1 + abs(x))  # noqa: E731
-    st = sj.solve_wheel(_full(WHEEL), _full(SNOW), LOADS, SLIPS, law)
+    st = sj.solve_wheel(_full(WHEEL), sj.ContactModel(_full(SNOW), shear=law), LOADS, SLIPS)
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED), st.status
     hyperbolic = lambda z, b: 4e5 * max(z, 0.0) / (1 - max(z, 0.0) / 0.25)  # noqa: E731
     for k in range(N):
@@ -332,7 +336,7 @@ def test_a_shear_law_defined_outside_the_package_on_both_contact_rules():
         assert float(st.drawbar_pull[k]) == pytest.approx(t - r, rel=1e-6, abs=1e-7 * LOADS[k])
     snow = sj.WongSnow(2e4, 0.2, 1e3, 0.3, 0.02)
     theta0 = np.array([0.3, 0.5, 0.3, 0.5])
-    forces = sj.contact_forces(WHEEL, snow, theta0, SLIPS, law)
+    forces = sj.contact_forces(WHEEL, sj.ContactModel(snow, shear=law), theta0, SLIPS)
     wong = lambda z, b: -2e4 * math.log1p(-z / 0.2)  # noqa: E731
     for k in range(N):
         exp = ref.contact(
@@ -611,7 +615,9 @@ def test_extensions_drive_and_brake_in_both_simulations(name):
     load = 3500.0
     vehicle = sj.Vehicle(mass=2 * load / 9.80665, wheel_inertia=1.5, wheel=wheel, num_wheels=2)
     torque = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -400.0]))
-    traj = sj.simulate_longitudinal(vehicle, model, torque, 1.2, 0.05, initial_speed=2.0)
+    traj = sj.simulate_longitudinal(
+        vehicle, model, torque, 1.2, 0.05, initial=sj.InitialState(speed=2.0)
+    )
     slips = np.asarray(traj.slip[:, 0])
     rows = [int(np.argmax(slips)), int(np.argmin(slips))]
     assert slips[rows[0]] > 0.05 and slips[rows[1]] < -0.05, slips  # driving and braking
@@ -623,7 +629,9 @@ def test_extensions_drive_and_brake_in_both_simulations(name):
 
     planar = sj.PlanarVehicle(1400.0, 1400.0 * (2.5**2 + 1.5**2) / 12, 1.5, wheel, 2.5, 1.5)
     drive = sj.TorqueProfile(jnp.array([0.0, 0.6, 1.2]), jnp.array([600.0, 600.0, -300.0]))
-    traj = sj.simulate_planar(planar, model, 0.15, drive, 1.2, 0.05, initial_speed=2.0)
+    traj = sj.simulate_planar(
+        planar, model, 0.15, drive, 1.2, 0.05, initial=sj.InitialState(speed=2.0)
+    )
     assert np.all(np.asarray(traj.status) == sj.Status.CONVERGED)
     slips = np.asarray(traj.slip)
     rows = np.array([np.argmax(slips[:, 0]), np.argmin(slips[:, 0])])
@@ -693,7 +701,9 @@ def test_gradients_of_the_one_method_shear_law_match_the_reference():
     truncation and the reference's rounding both below 1e-8 of the derivative)."""
 
     def pull(snow):
-        return sj.solve_wheel(_full(WHEEL), snow, LOADS, SLIPS, KONDNER).drawbar_pull
+        return sj.solve_wheel(
+            _full(WHEEL), sj.ContactModel(snow, shear=KONDNER), LOADS, SLIPS
+        ).drawbar_pull
 
     grads = jax.jacrev(lambda s: pull(s))(_full(SNOW))
     for field, value in (("shear_modulus", 0.01), ("modulus", 4e5)):
@@ -714,19 +724,28 @@ def test_fit_wheel_and_sweep_take_the_one_method_shear_law(tmp_path):
     reference = [_kondner_reference(k) for k in range(N)]
     result = sj.fit_wheel(
         WHEEL,
-        HyperbolicSnow(3e5, 0.25, 2e3, 0.2, 0.02),
+        sj.ContactModel(HyperbolicSnow(3e5, 0.25, 2e3, 0.2, 0.02), shear=KONDNER),
         LOADS,
         SLIPS,
+        {
+            "sinkage": np.array([x[1] for x in reference]),
+            "drawbar_pull": np.array([x[2] for x in reference]),
+        },
         fit=("modulus", "shear_modulus"),
-        shear=KONDNER,
-        sinkage=np.array([x[1] for x in reference]),
-        drawbar_pull=np.array([x[2] for x in reference]),
     )
     assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
     assert result.params["shear_modulus"] == pytest.approx(0.01, rel=1e-6)
     assert "shear='KondnerShear'" in result.info["title"]
-    swept = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, shear=KONDNER, grid=False,
-                     out=tmp_path / "sweep", progress=False, formats=("npz",))  # fmt: skip
+    swept = sj.sweep(
+        WHEEL,
+        sj.ContactModel(SNOW, shear=KONDNER),
+        LOADS,
+        SLIPS,
+        grid=False,
+        out=tmp_path / "sweep",
+        progress=False,
+        formats=("npz",),
+    )
     rows = dict(np.load(swept.files["npz"]))
     manifest = json.loads((tmp_path / "sweep" / "manifest.json").read_text())
     assert manifest["definition"]["shear"] == "KondnerShear"  # the law's name, recorded
@@ -785,9 +804,11 @@ def test_a_wheel_that_widens_with_depth_in_grad_fit_and_sweep(tmp_path):
         eqx.tree_at(lambda s: s.k_phi, BEKKER, 0.5 * k_phi),
         BULGE_LOADS,
         BULGE_SLIPS,
+        {
+            "sinkage": np.array([x[0] for x in reference]),
+            "drawbar_pull": np.array([x[1] for x in reference]),
+        },
         fit=("k_phi",),
-        sinkage=np.array([x[0] for x in reference]),
-        drawbar_pull=np.array([x[1] for x in reference]),
     )
     assert result.params["k_phi"] == pytest.approx(k_phi, rel=1e-6)
     swept = sj.sweep([BULGING, BulgingWheel(0.736, 0.2, 0.5)], BEKKER, BULGE_LOADS, BULGE_SLIPS,
@@ -820,9 +841,11 @@ def test_fit_wheel_and_sweep_take_a_force_term(tmp_path):
         start,
         LOADS,
         SLIPS,
+        {
+            "sinkage": np.array([x[0] for x in reference]),
+            "drawbar_pull": np.array([x[1] for x in reference]),
+        },
         fit=("modulus", "shear_modulus"),
-        sinkage=np.array([x[0] for x in reference]),
-        drawbar_pull=np.array([x[1] for x in reference]),
     )
     assert result.params["modulus"] == pytest.approx(4e5, rel=1e-6)
     assert result.params["shear_modulus"] == pytest.approx(0.01, rel=1e-6)

@@ -456,7 +456,7 @@ def round_trip():
         q: y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(y.shape)
         for q, y in clean.items()
     }
-    res = sj.fit_wheel(WHEEL, _snow(**START), LOADS, SLIPS, fit=FITTED, **data)
+    res = sj.fit_wheel(WHEEL, _snow(**START), LOADS, SLIPS, data, fit=FITTED)
     return data, res
 
 
@@ -519,7 +519,7 @@ def test_fit_wheel_standard_errors_are_calibrated(round_trip):
         for q in ("sinkage", "drawbar_pull"):
             y = np.asarray(getattr(clean, q))
             data[q] = y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(y.shape)
-        res = sj.fit_wheel(WHEEL, _snow(**START), LOADS, SLIPS, fit=FITTED, **data)
+        res = sj.fit_wheel(WHEEL, _snow(**START), LOADS, SLIPS, data, fit=FITTED)
         assert res.success
         for name in FITTED:
             true = float(getattr(TRUE_SNOW, name))
@@ -539,9 +539,13 @@ def test_fit_wheel_reports_bottomed_out_points(round_trip):
     st = _solve(TRUE_SNOW, loads, SLIPS)
     assert (np.asarray(st.status)[6:] == sj.Status.BOTTOMED_OUT).all()
     res = sj.fit_wheel(
-        WHEEL, _snow(**START), loads, SLIPS, fit=FITTED,
-        sinkage=np.asarray(st.sinkage), drawbar_pull=np.asarray(st.drawbar_pull),
-    )  # fmt: skip
+        WHEEL,
+        _snow(**START),
+        loads,
+        SLIPS,
+        {"sinkage": np.asarray(st.sinkage), "drawbar_pull": np.asarray(st.drawbar_pull)},
+        fit=FITTED,
+    )
     assert any("bottom out" in w and "p_w" in w for w in res.warnings)
     assert (res.info["status"][6:] == sj.Status.BOTTOMED_OUT).all()
     # Noise-free data: the fit still finds the snow.
@@ -571,22 +575,34 @@ def test_failed_equilibria_get_a_finite_penalty_without_gradient():
         (dict(fit=("p_w", "friction")), "unknown parameter"),
         (dict(fit=()), "at least one"),
         (dict(slip=SLIPS[:5]), "shape mismatch"),
-        (dict(sinkage=np.r_[np.nan, np.ones(11)]), "sinkage must be finite"),
-        (dict(sinkage=None), "at least one of sinkage"),
+        (dict(measured={"sinkage": np.r_[np.nan, np.ones(11)]}), "sinkage must be finite"),
+        (dict(measured={"sinkage": None}), "at least one of sinkage"),
+        (dict(measured={"sinkage_m": np.ones(12)}), r"unknown quantities \['sinkage_m'\]"),
         (dict(load=-LOADS), "load must be > 0"),
         (dict(scale={"drawbar_pull": 1.0}), "not measured"),
-        (dict(shear="elastic"), "shear must be"),
         (dict(max_steps=0), "max_steps must be an integer >= 1"),
         (dict(load=np.r_[1e200, LOADS[1:]]), r"load = 1e\+200 at index 0 is too large"),
     ],
 )
 def test_fit_wheel_rejects_bad_input(kwargs, match):
     args = dict(
-        wheel=WHEEL, snow=TRUE_SNOW, load=LOADS, slip=SLIPS, sinkage=np.full(12, 0.1), fit=FITTED
-    )
+        wheel=WHEEL, snow=TRUE_SNOW, load=LOADS, slip=SLIPS,
+        measured={"sinkage": np.full(12, 0.1)}, fit=FITTED,
+    )  # fmt: skip
     args.update(kwargs)
     with pytest.raises(ValueError, match=match):
         sj.fit_wheel(**args)
+
+
+def test_fit_wheels_old_keywords_name_the_new_spelling():
+    with pytest.raises(
+        TypeError, match=r'fit_wheel\(sinkage=...\) is now spelled measured=\{"sinkage"'
+    ):
+        sj.fit_wheel(WHEEL, TRUE_SNOW, LOADS, SLIPS, sinkage=np.full(12, 0.1))
+    with pytest.raises(TypeError, match=r"fit_wheel\(shear=...\) is now spelled ContactModel"):
+        sj.fit_wheel(WHEEL, TRUE_SNOW, LOADS, SLIPS, {"sinkage": np.ones(12)}, shear="none")
+    with pytest.raises(ValueError, match="shear must be"):
+        sj.ContactModel(TRUE_SNOW, shear="elastic")
 
 
 @pytest.mark.parametrize("z_w", [2.0, 10.0])
@@ -598,7 +614,7 @@ def test_fit_wheel_without_equilibria_is_an_error(round_trip, z_w):
     equilibrium (what the model gives at z_w = 10 m)."""
     data, _ = round_trip
     with pytest.raises(ValueError, match="12 of 12 data points have no equilibrium"):
-        sj.fit_wheel(WHEEL, _snow(**{**START, "z_w": z_w}), LOADS, SLIPS, fit=FITTED, **data)
+        sj.fit_wheel(WHEEL, _snow(**{**START, "z_w": z_w}), LOADS, SLIPS, data, fit=FITTED)
 
 
 # ---------------------------------------------------------------------------------------

@@ -42,8 +42,8 @@ def test_an_empty_batch_gives_empty_results():
         ({"slip": np.array([True])}, TypeError, "slip must be a real number or array, got a bool"),
         ({"load": None}, TypeError, "load must be a real number or array, got None"),
         ({"load": [[1e3, 2e3], [3e3]]}, TypeError, "load must be a real number or array"),
-        ({"nodes_per_panel": 2.5}, TypeError, "nodes_per_panel must be None or an integer >= 1"),
-        ({"nodes_per_panel": 0}, TypeError, "nodes_per_panel must be None or an integer"),
+        ({"nodes_per_panel": 12}, TypeError,
+         "solve_wheel(nodes_per_panel=...) is now spelled ContactModel(terrain, nodes_per_panel"),
         ({"max_steps": -1}, ValueError, "max_steps must be an integer >= 1, got -1"),
         ({"max_steps": 3.5}, ValueError, "max_steps must be an integer >= 1, got 3.5"),
         ({"initial_entry_angle": "x"}, TypeError, "initial_entry_angle must be a real number"),
@@ -54,6 +54,17 @@ def test_bad_arguments_are_named(kwargs, error, message):
     load, slip = args.pop("load"), args.pop("slip")
     with pytest.raises(error, match=re.escape(message)):
         sj.solve_wheel(WHEEL, SNOW, load, slip, **args)
+
+
+@pytest.mark.parametrize(
+    ("value", "error", "message"),
+    [(2.5, TypeError, "nodes_per_panel must be None or an int, got 2.5"),
+     (True, TypeError, "nodes_per_panel must be None or an int, got True"),
+     (1, ValueError, "nodes_per_panel must be >= 2, got 1")],
+)  # fmt: skip
+def test_the_models_nodes_per_panel_is_checked(value, error, message):
+    with pytest.raises(error, match=re.escape(message)):
+        sj.ContactModel(SNOW, nodes_per_panel=value)
 
 
 def test_a_parameter_shape_clash_names_the_leaf():
@@ -116,7 +127,7 @@ def test_reused_parameter_sets_are_still_checked_with_each_load_and_slip():
     no_cohesion = sj.WongSnow(85e3, 0.2, 0.0, 0.08, 0.01)
     sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3)
     with pytest.raises(ValueError, match="snow.cohesion must be finite and > 0 Pa"):
-        sj.solve_wheel(WHEEL, no_cohesion, 4e3, 0.3, shear="simplified")
+        sj.solve_wheel(WHEEL, sj.ContactModel(no_cohesion, shear="simplified"), 4e3, 0.3)
 
 
 def test_a_checked_wheel_and_terrain_still_check_the_distribution():
@@ -124,6 +135,6 @@ def test_a_checked_wheel_and_terrain_still_check_the_distribution():
     slip-dependent rules are checked on every call all the same."""
     wheel = sj.RigidWheel(jnp.asarray(0.8), jnp.asarray(0.3))
     soil = sj.BekkerSoil.snow_us()
-    sj.solve_wheel(wheel, soil, 800.0, 0.2, distribution=sj.WongReece(0.43, 0.32))
+    sj.solve_wheel(wheel, sj.ContactModel(soil, sj.WongReece(0.43, 0.32)), 800.0, 0.2)
     with pytest.raises(ValueError, match=r"distribution\.c1 \+ c2 \* slip"):
-        sj.solve_wheel(wheel, soil, 800.0, 0.2, distribution=sj.WongReece(-0.5, 0.32))
+        sj.solve_wheel(wheel, sj.ContactModel(soil, sj.WongReece(-0.5, 0.32)), 800.0, 0.2)

@@ -137,7 +137,11 @@ def test_equilibrium_and_lateral_force_match_adaptive_quadrature(case):
     terrain, dist, load, slip, deg, lateral = CASES[case]
     beta = math.radians(deg)
     st = sj.solve_wheel(
-        WHEEL, terrain, load, slip, distribution=dist, slip_angle=beta, lateral=lateral
+        WHEEL,
+        sj.ContactModel(terrain, distribution=dist, lateral=lateral),
+        load,
+        slip,
+        slip_angle=beta,
     )
     assert int(st.status) == Status.CONVERGED
     law, th_max = _law(terrain)
@@ -172,15 +176,15 @@ def test_zero_slip_angle_reproduces_straight_running(name):
     terrain = SHIPPED_SNOWS[name]
     dist = sj.WongReece(0.43, 0.32) if name == "snow_us" else None
     loads = np.array([[1500.0], [4000.0]])
-    before = sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist)
+    before = sj.solve_wheel(WHEEL, sj.ContactModel(terrain, dist), loads, SLIPS)
     # A concrete zero takes the same solver path: bit for bit.
-    same = sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist, slip_angle=0.0)
+    same = sj.solve_wheel(WHEEL, sj.ContactModel(terrain, dist), loads, SLIPS, slip_angle=0.0)
     for field in ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque", "status"):
         np.testing.assert_array_equal(getattr(same, field), getattr(before, field))
     np.testing.assert_array_equal(same.lateral_force, 0.0)
     # A traced zero takes the combined-shear quadrature: the same model.
     traced = jax.jit(
-        lambda b: sj.solve_wheel(WHEEL, terrain, loads, SLIPS, distribution=dist, slip_angle=b)
+        lambda b: sj.solve_wheel(WHEEL, sj.ContactModel(terrain, dist), loads, SLIPS, slip_angle=b)
     )(0.0)
     np.testing.assert_array_equal(traced.status, before.status)
     np.testing.assert_allclose(traced.entry_angle, before.entry_angle, rtol=1e-9)
@@ -201,7 +205,9 @@ def test_lateral_force_is_odd_and_grows_with_slip_angle_up_to_30_degrees(name):
     betas = np.deg2rad(np.arange(2.5, 30.01, 2.5))[:, None]
     both = np.concatenate([betas, -betas])
     for lateral in (Lateral(), Lateral(unit_weight=3e3, bulldozing=True)):
-        st = sj.solve_wheel(WHEEL, terrain, LOADS[name], SLIPS, slip_angle=both, lateral=lateral)
+        st = sj.solve_wheel(
+            WHEEL, sj.ContactModel(terrain, lateral=lateral), LOADS[name], SLIPS, slip_angle=both
+        )
         assert np.all(st.status == Status.CONVERGED)
         fy = np.asarray(st.lateral_force)
         pos, neg = fy[: len(betas)], fy[len(betas) :]
@@ -248,7 +254,9 @@ def test_gradients_wrt_every_leaf_match_central_differences():
 
     def outputs(p):
         wh, tr, ds, lt, load, slip, beta = p
-        st = sj.solve_wheel(wh, tr, load, slip, distribution=ds, slip_angle=beta, lateral=lt)
+        st = sj.solve_wheel(
+            wh, sj.ContactModel(tr, distribution=ds, lateral=lt), load, slip, slip_angle=beta
+        )
         return jnp.stack([st.sinkage, st.drawbar_pull, st.lateral_force, st.aligning_torque])
 
     jac = jax.jit(jax.jacfwd(outputs))(params)
@@ -288,15 +296,21 @@ def test_bad_slip_angle_and_lateral_inputs():
     with pytest.raises(ValueError, match="slip_angle must be finite"):
         sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=[0.1, np.nan])
     with pytest.raises(ValueError, match="lateral.shear_modulus must be finite and > 0 m"):
-        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=Lateral(-0.01))
+        sj.solve_wheel(
+            WHEEL, sj.ContactModel(snow, lateral=Lateral(-0.01)), 3000.0, 0.2, slip_angle=0.1
+        )
     with pytest.raises(ValueError, match="lateral.unit_weight"):
-        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=Lateral(None, -1.0))
+        sj.solve_wheel(
+            WHEEL, sj.ContactModel(snow, lateral=Lateral(None, -1.0)), 3000.0, 0.2, slip_angle=0.1
+        )
     with pytest.raises(TypeError, match="slip_angle must be a real number"):
         sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle="10 deg")
     with pytest.raises(TypeError, match="lateral must be None or a snowjax.Lateral"):
-        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, slip_angle=0.1, lateral=0.02)
+        sj.solve_wheel(WHEEL, sj.ContactModel(snow, lateral=0.02), 3000.0, 0.2, slip_angle=0.1)
     with pytest.raises(ValueError, match="simplified"):
-        sj.solve_wheel(WHEEL, snow, 3000.0, 0.2, "simplified", slip_angle=0.1)
+        sj.solve_wheel(
+            WHEEL, sj.ContactModel(snow, shear="simplified"), 3000.0, 0.2, slip_angle=0.1
+        )
     with pytest.raises(ValueError, match="slip_angle"):
         sj.solve_wheel(WHEEL, snow, 3000.0, [0.1, 0.2], slip_angle=[0.1, 0.2, 0.3])
     # Under jit: a status per element, the rest of the batch solved.
@@ -319,9 +333,16 @@ def test_bad_slip_angle_and_lateral_inputs():
 def test_every_terrain_law_batched_with_slip_angle(terrain):
     betas = np.deg2rad([[-20.0], [0.0], [20.0]])
     st = sj.solve_wheel(
-        WHEEL, terrain, 2500.0, [-0.3, 0.2], distribution=sj.WongReece(0.43, 0.32),
-        slip_angle=betas, lateral=Lateral(unit_weight=5e3, bulldozing=True),
-    )  # fmt: skip
+        WHEEL,
+        sj.ContactModel(
+            terrain,
+            distribution=sj.WongReece(0.43, 0.32),
+            lateral=Lateral(unit_weight=5e3, bulldozing=True),
+        ),
+        2500.0,
+        [-0.3, 0.2],
+        slip_angle=betas,
+    )
     assert st.lateral_force.shape == (3, 2)
     assert np.all(st.status == Status.CONVERGED)
     np.testing.assert_allclose(st.lateral_force[0], -st.lateral_force[2], rtol=1e-12)
@@ -332,16 +353,23 @@ def test_every_terrain_law_batched_with_slip_angle(terrain):
 def test_float32_has_no_nan():
     f32 = lambda t: jax.tree_util.tree_map(lambda x: jnp.asarray(x, jnp.float32), t)  # noqa: E731
     st = sj.solve_wheel(
-        f32(WHEEL), f32(SHIPPED_SNOWS["fresh"]), jnp.float32(3500.0),
-        jnp.asarray(SLIPS, jnp.float32), slip_angle=jnp.float32(0.4),
-        lateral=f32(Lateral(0.02, 3e3, bulldozing=True)),
-    )  # fmt: skip
+        f32(WHEEL),
+        sj.ContactModel(
+            f32(SHIPPED_SNOWS["fresh"]), lateral=f32(Lateral(0.02, 3e3, bulldozing=True))
+        ),
+        jnp.float32(3500.0),
+        jnp.asarray(SLIPS, jnp.float32),
+        slip_angle=jnp.float32(0.4),
+    )
     assert st.lateral_force.dtype == jnp.float32
     assert np.all(np.isfinite(st.lateral_force)) and np.all(st.status == Status.CONVERGED)
     ref64 = sj.solve_wheel(
-        WHEEL, SHIPPED_SNOWS["fresh"], 3500.0, SLIPS, slip_angle=0.4,
-        lateral=Lateral(0.02, 3e3, bulldozing=True),
-    )  # fmt: skip
+        WHEEL,
+        sj.ContactModel(SHIPPED_SNOWS["fresh"], lateral=Lateral(0.02, 3e3, bulldozing=True)),
+        3500.0,
+        SLIPS,
+        slip_angle=0.4,
+    )
     np.testing.assert_allclose(st.lateral_force, ref64.lateral_force, rtol=1e-4)
 
 
@@ -356,16 +384,26 @@ def test_fit_wheel_recovers_lateral_modulus_from_synthetic_lateral_forces():
     betas = np.deg2rad([10.0, 10.0, 10.0, 10.0, 30.0, 30.0, 30.0, 30.0])
     loads = np.full(8, 3000.0)
     st = sj.solve_wheel(
-        WHEEL, terrain, loads, slips, distribution=dist, slip_angle=betas, lateral=truth
+        WHEEL,
+        sj.ContactModel(terrain, distribution=dist, lateral=truth),
+        loads,
+        slips,
+        slip_angle=betas,
     )
     start = sj.BekkerSoil(1.1, 0.0, 800e3, 1.5e3, 0.4, shear_modulus=0.02)
     res = sj.fit_wheel(
-        WHEEL, start, loads, slips, sinkage=st.sinkage, drawbar_pull=st.drawbar_pull,
-        lateral_force=st.lateral_force, slip_angle=betas, distribution=dist,
-        lateral=Lateral(shear_modulus=0.02), fit=("tan_phi", "lateral.shear_modulus"),
-    )  # fmt: skip
+        WHEEL,
+        sj.ContactModel(start, distribution=dist, lateral=Lateral(shear_modulus=0.02)),
+        loads,
+        slips,
+        {"sinkage": st.sinkage, "drawbar_pull": st.drawbar_pull, "lateral_force": st.lateral_force},
+        slip_angle=betas,
+        fit=("tan_phi", "lateral.shear_modulus"),
+    )
     assert res.params["tan_phi"] == pytest.approx(0.55, rel=1e-6)
     assert res.params["lateral.shear_modulus"] == pytest.approx(0.035, rel=1e-6)
     assert float(res.info["lateral"].shear_modulus) == pytest.approx(0.035, rel=1e-6)
     with pytest.raises(ValueError, match="lateral_force data need the slip_angle"):
-        sj.fit_wheel(WHEEL, start, loads, slips, lateral_force=st.lateral_force, fit=("tan_phi",))
+        sj.fit_wheel(
+            WHEEL, start, loads, slips, {"lateral_force": st.lateral_force}, fit=("tan_phi",)
+        )

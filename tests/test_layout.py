@@ -149,8 +149,8 @@ def test_a_new_terrain_law_is_one_class(make):
                            shear_modulus=0.01)  # fmt: skip
     load, slip = np.array([2e3, 4e3, 6e3]), np.array([0.1, 0.3, 0.5])
     for dist in (None, sj.WongReece(0.43, 0.32)):
-        a = sj.solve_wheel(wheel, mine, load, slip, distribution=dist)
-        b = sj.solve_wheel(wheel, bekker, load, slip, distribution=dist)
+        a = sj.solve_wheel(wheel, sj.ContactModel(mine, dist), load, slip)
+        b = sj.solve_wheel(wheel, sj.ContactModel(bekker, dist), load, slip)
         assert np.all(np.asarray(a.status) == 0)
         np.testing.assert_allclose(a.sinkage, b.sinkage, rtol=1e-12)
         np.testing.assert_allclose(a.drawbar_pull, b.drawbar_pull, rtol=1e-10)
@@ -177,3 +177,32 @@ def test_no_function_holds_over_100_lines_of_code():
             if len(code) > 100:
                 long.append(f"{path.relative_to(PKG.parent)}::{node.name} ({len(code)} lines)")
     assert not long, long
+
+
+def test_no_public_function_takes_over_10_parameters():
+    """The settings that travel together are modules (`ContactModel`, `InitialState`,
+    `Stepping`, `SweepRun`, `SnowCover`, ...), so no public function or method of
+    `snowjax` or `snowjax.mjx` takes more than 10 parameters (`self` not counted)."""
+    import importlib
+    import inspect
+
+    names = []
+    for module_name in ("snowjax", "snowjax.mjx"):
+        module = importlib.import_module(module_name)
+        for name in getattr(module, "__all__", None) or dir(module):
+            obj = getattr(module, name)
+            if name.startswith("_"):
+                continue
+            if inspect.isfunction(obj):
+                names.append((f"{module_name}.{name}", obj))
+            elif inspect.isclass(obj) and obj.__module__.startswith("snowjax"):
+                for attr, value in vars(obj).items():
+                    if inspect.isfunction(value) and not attr.startswith("_"):
+                        names.append((f"{module_name}.{name}.{attr}", value))
+    assert len(names) > 100  # the public surface was found
+    wide = []
+    for label, function in names:
+        parameters = [p for p in inspect.signature(function).parameters if p != "self"]
+        if len(parameters) > 10:
+            wide.append(f"{label}: {len(parameters)} parameters")
+    assert not wide, wide

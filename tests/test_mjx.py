@@ -176,9 +176,14 @@ def test_steady_turn_radius_matches_simulate_planar(rover, run):
     )  # fmt: skip
     spin = speed / (RADIUS * (1 - slip))
     planar = sj.simulate_planar(
-        vehicle, SNOW, delta, jnp.full(4, TORQUE), 3.0, 0.01,
-        initial_speed=speed, initial_wheel_speed=jnp.full(4, spin),
-    )  # fmt: skip
+        vehicle,
+        SNOW,
+        delta,
+        jnp.full(4, TORQUE),
+        3.0,
+        0.01,
+        initial=sj.InitialState(speed=speed, wheel_speed=jnp.full(4, spin)),
+    )
     for t in (1.0, 2.0, 3.0):
         k, j = int(round(t / 0.005)) - 1, int(round(t / 0.01))
         qpos, qvel = np.asarray(r.qpos[k]), np.asarray(r.qvel[k])
@@ -361,19 +366,22 @@ def test_traced_bad_prescribed_loads_are_flagged(rover):
 
 @pytest.mark.slow  # the rover's step compiled again (make test-slow)
 def test_a_contact_model_traces_the_same_step(rover):
-    """`ContactModel` in place of the terrain: the traced step is the one of the separate
-    keywords (compared as jaxprs: no compile needed)."""
+    """A bare terrain traces the step of `ContactModel(terrain)` (compared as jaxprs: no
+    compile needed); a model part given as a keyword raises a `TypeError` naming the
+    model's spelling."""
     _, m, wheels, d0 = rover
     plate = sj.WongReece(0.4, 0.3, -0.1)
 
     def forces(snow, **keywords):
         return smjx.step(m, d0, wheels, snow, **keywords)[1].longitudinal_force
 
-    by_keywords = jax.make_jaxpr(lambda s, p: forces(s, distribution=p))(SNOW, plate)
-    by_model = jax.make_jaxpr(lambda s, p: forces(sj.ContactModel(s, p)))(SNOW, plate)
-    assert str(by_model) == str(by_keywords)
-    with pytest.raises(TypeError, match="distribution given both"):
-        forces(sj.ContactModel(SNOW, plate), distribution=plate)
+    bare = jax.make_jaxpr(lambda s: forces(s))(SNOW)
+    by_model = jax.make_jaxpr(lambda s: forces(sj.ContactModel(s)))(SNOW)
+    assert str(by_model) == str(bare)  # a bare terrain is ContactModel(terrain)
+    with_plate = jax.make_jaxpr(lambda s, p: forces(sj.ContactModel(s, p)))(SNOW, plate)
+    assert str(with_plate) != str(bare)
+    with pytest.raises(TypeError, match=r"step\(distribution=...\) is now spelled ContactModel"):
+        forces(SNOW, distribution=plate)
 
 
 def test_bad_input_raises(rover):
@@ -413,6 +421,6 @@ def test_bad_input_raises(rover):
     with pytest.raises(ValueError, match=r"load must be finite and >= 0 N"):
         smjx.step(m, d0, wheels, SNOW, load=jnp.array([-100.0, 3500.0, 3500.0, 3500.0]))
     with pytest.raises(ValueError, match="simplified"):
-        smjx.step(m, d0, wheels, SNOW, shear="simplified")
+        smjx.step(m, d0, wheels, sj.ContactModel(SNOW, shear="simplified"))
     with pytest.raises(ValueError, match="episode_length"):
         smjx.SnowRoverEnv(episode_length=0)

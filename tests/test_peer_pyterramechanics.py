@@ -99,10 +99,9 @@ def test_wong_reece_matches_pyterramechanics(case):
     slips = np.array([r[0] for r in rows])
     st = sj.solve_wheel(
         sj.RigidWheel(2 * p["r"], p["b"]),
-        soil,
+        sj.ContactModel(soil, sj.WongReece(p["c1"], p["c2"])),
         p["W"],
         slips,
-        distribution=sj.WongReece(p["c1"], p["c2"]),
     )
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
     ref = np.array([r[1:] for r in rows])

@@ -60,9 +60,8 @@ def _run(snow, x):
             sj.TorqueProfile(KNOTS, jnp.full(5, z[7])),
             T1,
             DT,
-            initial_speed=z[8],
-            initial_yaw_rate=z[9],
-            adjoint=diffrax.ForwardMode(),
+            initial=sj.InitialState(speed=z[8], yaw_rate=z[9]),
+            stepping=sj.Stepping(adjoint=diffrax.ForwardMode()),
         )
         return jnp.stack([traj.x[-1], traj.y[-1], traj.yaw[-1], traj.speed[-1]]), traj
 
@@ -340,7 +339,6 @@ def test_vehicle_geometry():
     "kwargs, error, match",
     [
         (dict(dt=0.0), ValueError, "dt"),
-        (dict(speed_eps=-1.0), ValueError, "speed_eps"),
         (dict(steering=2.0), ValueError, "steering"),
         (dict(steering="left"), TypeError, "steering"),
         (dict(steering=SteeringProfile([1.0, 0.0], [0.0, 0.1])), ValueError, "increasing"),
@@ -349,9 +347,11 @@ def test_vehicle_geometry():
         (dict(steering=lambda t, y: 3.0), ValueError, "steering input is outside"),
         (dict(torque=sj.TorqueProfile([0.0, 1.0], [[1.0, 2.0]] * 2)), ValueError, "Profile"),
         (dict(torque=np.ones(3)), ValueError, "torque"),
-        (dict(initial_speed=np.inf), ValueError, "initial_speed"),
-        (dict(shear="simplified"), ValueError, "simplified"),
-        (dict(lateral="none"), TypeError, "lateral"),
+        (dict(initial=sj.InitialState(speed=np.inf)), ValueError, "initial.speed"),
+        (dict(initial=sj.InitialState(wheel_speed=np.ones(3))), ValueError, r"shape \(4,\)"),
+        (dict(snow=sj.ContactModel(FRESH, shear="simplified")), ValueError, "simplified"),
+        (dict(lateral=sj.Lateral()), TypeError, r"lateral=...\) is now spelled ContactModel"),
+        (dict(stepping=2), TypeError, "stepping must be a snowjax.Stepping"),
         (dict(vehicle=sj.Vehicle(600.0, 1.5, sj.RigidWheel.thesis_tire())), TypeError, "Planar"),
         (dict(snow=1.0), TypeError, "terrain"),
         (dict(vehicle=PlanarVehicle(-1.0, 1.0, 1.5, VEHICLE.wheel, 2.0, 1.4)), ValueError, "mass"),
@@ -378,20 +378,26 @@ def test_bad_input_raises(kwargs, error, match):
 
 
 def test_a_contact_model_traces_the_same_simulation():
-    """`ContactModel` in place of the terrain (with its lateral law): the traced program
-    is the one of the separate keywords (compared as jaxprs: no compile needed)."""
+    """A bare terrain traces the program of `ContactModel(terrain)` with the default
+    lateral law (compared as jaxprs: no compile needed); the keywords that moved into the
+    model, `InitialState` and `Stepping` raise a `TypeError` naming their new spelling."""
     lateral = sj.Lateral(shear_modulus=0.02)
 
     def run(snow, **keywords):
         return simulate_planar(VEHICLE, snow, 0.1, 100.0, 0.2, 0.1, **keywords).x
 
-    # The lateral law as an argument in both, so that its leaves are inputs of both.
-    by_keywords = jax.make_jaxpr(lambda s, lat: run(s, lateral=lat, shear="none"))(FRESH, lateral)
-    by_model = jax.make_jaxpr(lambda s, lat: run(sj.ContactModel(s, shear="none", lateral=lat)))
-    assert str(by_model(FRESH, lateral)) == str(by_keywords)
-    model = sj.ContactModel(FRESH, shear="none", lateral=lateral)
-    with pytest.raises(TypeError, match="lateral given both"):
-        run(model, lateral=lateral)
+    # A bare terrain is ContactModel(terrain) with the default lateral law, Lateral().
+    bare = jax.make_jaxpr(lambda s: run(s))(FRESH)
+    by_model = jax.make_jaxpr(lambda s: run(sj.ContactModel(s, lateral=sj.Lateral())))(FRESH)
+    assert str(by_model) == str(bare)
+    with_law = jax.make_jaxpr(lambda s: run(sj.ContactModel(s, lateral=lateral)))(FRESH)
+    assert str(with_law) != str(bare)
+    with pytest.raises(TypeError, match=r"simulate_planar\(lateral=...\) is now spelled"):
+        run(FRESH, lateral=lateral)
+    with pytest.raises(TypeError, match=r"initial=InitialState\(speed=...\)"):
+        run(FRESH, initial_speed=1.0)
+    with pytest.raises(TypeError, match=r"stepping=Stepping\(save_every=...\)"):
+        run(FRESH, save_every=2)
 
 
 def test_a_steering_controller_out_of_range_stops_the_run():

@@ -35,6 +35,7 @@ from hypothesis import strategies as st
 import snowjax as sj
 from snowjax import Status
 from snowjax._sim.planar import _body_to_wheel, _planar_wheel_forces
+from snowjax._wheel.passes import _resolved
 
 from .random_cases import UNIT_ROWS, any_terrain_inputs, tire_and_rut_inputs
 
@@ -89,7 +90,7 @@ def _inputs(cases, dtype):
 
 
 def _drawbar_pull_sum(snow, wheel, load, slip, shear):
-    state = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+    state = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), load, slip)
     return jnp.sum(state.drawbar_pull), state
 
 
@@ -100,7 +101,7 @@ def _solve_and_differentiate(wheel, snow, load, slip):
     states, grads = {}, {}
     for shear in SHEAR_MODELS:
         if shear == "none":
-            states[shear] = sj.solve_wheel(wheel, snow, load, slip, shear=shear)
+            states[shear] = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), load, slip)
             continue
         fn = jax.grad(_drawbar_pull_sum, has_aux=True)
         grads[shear], states[shear] = fn(snow, wheel, load, slip, shear)
@@ -160,7 +161,9 @@ def test_float32_gradient_at_a_vanishing_braking_slip_is_finite():
 
     def drawbar_pull(p_w, slip):
         snow = sj.WongSnow(p_w, f32(0.05), f32(np.exp(5)), f32(0.5), f32(np.exp(-5)))
-        return sj.solve_wheel(wheel, snow, f32(np.exp(5)), slip, shear="simplified").drawbar_pull
+        return sj.solve_wheel(
+            wheel, sj.ContactModel(snow, shear="simplified"), f32(np.exp(5)), slip
+        ).drawbar_pull
 
     grad = jax.jit(jax.grad(drawbar_pull, argnums=(0, 1)))
     tiny, zero = grad(f32(np.exp(9)), f32(-1.7339896679487998e-36)), grad(f32(np.exp(9)), f32(0))
@@ -198,13 +201,15 @@ def _forces_sum(terrain, wheel, distribution, lateral, load, slip, beta, config)
     dist, steered, bulldozing, shear = config
     state = sj.solve_wheel(
         wheel,
-        terrain,
+        sj.ContactModel(
+            terrain,
+            distribution=distribution if dist == "wong_reece" else None,
+            shear=shear,
+            lateral=sj.Lateral(lateral.shear_modulus, lateral.unit_weight, bulldozing=bulldozing),
+        ),
         load,
         slip,
-        shear,
-        distribution=distribution if dist == "wong_reece" else None,
         slip_angle=beta if steered else None,
-        lateral=sj.Lateral(lateral.shear_modulus, lateral.unit_weight, bulldozing=bulldozing),
     )
     return jnp.sum(state.drawbar_pull + state.lateral_force), state
 
@@ -287,8 +292,8 @@ def _tire_and_rut_solve(wheel, tires, terrain, distribution, load, slip, ruts):
     and the rim on the ruts (front region)."""
     out = {}
     for name, dist in (("front", None), ("wong_reece", distribution)):
-        out[f"tire {name}"] = sj.solve_wheel(tires, terrain, load, slip, distribution=dist)
-        out[f"rim {name}"] = sj.solve_wheel(wheel, terrain, load, slip, distribution=dist)
+        out[f"tire {name}"] = sj.solve_wheel(tires, sj.ContactModel(terrain, dist), load, slip)
+        out[f"rim {name}"] = sj.solve_wheel(wheel, sj.ContactModel(terrain, dist), load, slip)
     out["rut"] = sj.solve_wheel(wheel, ruts, load, slip)
     return out
 
@@ -388,7 +393,7 @@ def _wheel_power(terrain, distribution, speed, wheel_speed, load):
     """(power [W], power scale [W], status) of `wheel_forces`, front region and Wong–Reece."""
     out = []
     for dist in (None, distribution):
-        f = sj.wheel_forces(speed, wheel_speed, load, WHEEL, terrain, distribution=dist)
+        f = sj.wheel_forces(speed, wheel_speed, load, WHEEL, sj.ContactModel(terrain, dist))
         terms = (f.longitudinal_force * speed, -f.resisting_torque * wheel_speed)
         out.append((*terms, jnp.abs(terms[0]) + jnp.abs(terms[1]), f.status))
     return out
@@ -445,7 +450,8 @@ def _planar_power(terrain, u, v, r, omega, delta):
     out = []
     for lateral in (sj.Lateral(), sj.Lateral(None, 1.2e4, bulldozing=True)):
         contact = sj.ContactModel(terrain, lateral=lateral)
-        f = _planar_wheel_forces(PLANAR, contact, u, v, r, omega, steer, EPS, None, 64)
+        virgin = _resolved(None, 4)
+        f = _planar_wheel_forces(PLANAR, contact, u, v, r, omega, steer, EPS, None, 64, virgin)
         terms = (f.drawbar_pull * vx, f.lateral_force * vy, -f.resisting_torque * omega)
         wheel = sum(terms)
         vehicle = jnp.sum(wheel + f.aligning_torque * r[:, None], axis=1)
@@ -491,8 +497,7 @@ def _longitudinal(speed, wheel_speed, torque):
         torque,
         0.5,
         0.025,
-        initial_speed=speed,
-        initial_wheel_speed=wheel_speed,
+        initial=sj.InitialState(speed=speed, wheel_speed=wheel_speed),
     )
 
 
@@ -551,9 +556,7 @@ def _planar(u0, r0, omega0, delta):
         0.0,
         0.5,
         0.05,
-        initial_speed=u0,
-        initial_yaw_rate=r0,
-        initial_wheel_speed=omega0,
+        initial=sj.InitialState(speed=u0, yaw_rate=r0, wheel_speed=omega0),
     )
 
 

@@ -59,12 +59,12 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     1e-12 (measured: 1e-15 relative)."""
     virgin, wr, load = CASES[case]
     dist = None if wr is None else sj.WongReece(*wr)
-    first = sj.solve_wheel(WHEEL, virgin, load, SLIP, distribution=dist)
+    first = sj.solve_wheel(WHEEL, sj.ContactModel(virgin, dist), load, SLIP)
     z_u = float(first.sinkage)
     depths = jnp.array([z_u, z_u, 0.0])
     loads = jnp.array([load, 1.5 * load, load])
     rut = sj.Rut(virgin, depths, WHEEL.width, K_0, A_U)
-    st = sj.solve_wheel(WHEEL, rut, loads, SLIP, distribution=dist)
+    st = sj.solve_wheel(WHEEL, sj.ContactModel(rut, dist), loads, SLIP)
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
     for field in ("entry_angle", "sinkage", "motion_resistance", "drawbar_pull", "torque"):
         np.testing.assert_allclose(getattr(st, field)[2], getattr(first, field), rtol=1e-12)
@@ -108,9 +108,9 @@ def test_gradients_flow_from_the_first_wheel_into_the_second():
     def second(x):
         p_w, k_0, load = x
         virgin = sj.WongSnow(p_w, snow.z_w, snow.cohesion, snow.tan_phi, snow.shear_modulus)
-        z_u = sj.solve_wheel(WHEEL, virgin, load, SLIP, distribution=dist).sinkage
+        z_u = sj.solve_wheel(WHEEL, sj.ContactModel(virgin, dist), load, SLIP).sinkage
         rut = sj.Rut(virgin, z_u, WHEEL.width, k_0, A_U)
-        st = sj.solve_wheel(WHEEL, rut, load, SLIP, distribution=dist)
+        st = sj.solve_wheel(WHEEL, sj.ContactModel(rut, dist), load, SLIP)
         return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull])
 
     x = np.array([float(snow.p_w), 3e6, 4000.0])
@@ -145,7 +145,7 @@ def test_multi_pass_is_the_chain_of_ruts_and_the_rut_deepens_to_the_base():
     snow = sj.WongSnow.thesis_fresh_snow()
     dist = sj.WongReece(0.43, 0.32)
     loads = np.array([[4000.0] * 4, [4000.0, 6000.0, 4000.0, 6000.0]])
-    res = sj.multi_pass(WHEEL, snow, loads, SLIP, K_0, A_U, distribution=dist)
+    res = sj.multi_pass(WHEEL, sj.ContactModel(snow, dist), loads, SLIP, K_0, A_U)
     status = np.asarray(res.status)
     assert np.all(status[0] == sj.Status.CONVERGED)
     assert np.all(status[1, :3] == sj.Status.CONVERGED)
@@ -154,7 +154,7 @@ def test_multi_pass_is_the_chain_of_ruts_and_the_rut_deepens_to_the_base():
         deepest = 0.0
         for k in range(4):
             rut = sj.Rut(snow, deepest, WHEEL.width, K_0, A_U)
-            st = sj.solve_wheel(WHEEL, rut, loads[row, k], SLIP, distribution=dist)
+            st = sj.solve_wheel(WHEEL, sj.ContactModel(rut, dist), loads[row, k], SLIP)
             total = min(float(st.sinkage + rut.floor_depth), float(snow.z_w))
             deepest = max(deepest, total)
             np.testing.assert_allclose(res.sinkage[row, k], total, rtol=1e-12)

@@ -80,7 +80,14 @@ def test_longitudinal_rear_wheel_runs_in_the_front_wheels_rut():
     """A tandem (2 wheels, 3.5 kN each, 600 N m on each) from 1 m/s for 2 s."""
     vehicle = sj.Vehicle(mass=2 * LOAD / 9.80665, wheel_inertia=1.5, wheel=WHEEL, num_wheels=2)
     traj = sj.simulate_longitudinal(
-        vehicle, SNOW, 600.0, 2.0, 0.05, initial_speed=1.0, ruts=RUTS, save_every=40
+        vehicle,
+        SNOW,
+        600.0,
+        2.0,
+        0.05,
+        ruts=RUTS,
+        initial=sj.InitialState(speed=1.0),
+        stepping=sj.Stepping(save_every=40),
     )
     assert traj.result == diffrax.RESULTS.successful
     assert np.all(np.asarray(traj.status) == Status.CONVERGED)
@@ -179,7 +186,15 @@ def test_planar_rear_wheels_follow_the_front_ruts_and_leave_them_in_a_turn():
 
     def run(steer):
         return sj.simulate_planar(
-            vehicle, SNOW, steer, 300.0, 2.0, 0.05, initial_speed=1.5, ruts=RUTS, save_every=40
+            vehicle,
+            SNOW,
+            steer,
+            300.0,
+            2.0,
+            0.05,
+            ruts=RUTS,
+            initial=sj.InitialState(speed=1.5),
+            stepping=sj.Stepping(save_every=40),
         )
 
     traj = jax.jit(jax.vmap(run))(jnp.array([0.0, 0.1, 0.3]))
@@ -230,7 +245,7 @@ def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     def forces(d):
         d = mjx.fwd_velocity(m, mjx.fwd_position(m, d))
         load = wheels.static_load
-        contact = _contact_model(SNOW, "classic", None, None)[-1]
+        contact = _contact_model(SNOW)[-1]
         return _snow_forces(m, d, wheels, contact, None, load, 0.05, ruts)[-1]
 
     out = jax.tree.map(np.asarray, forces(d))

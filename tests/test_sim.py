@@ -44,7 +44,13 @@ def _simulate(x, v0):
     snow = sj.WongSnow(x[0], SNOW.z_w, SNOW.cohesion, x[1], SNOW.shear_modulus)
     torque = sj.TorqueProfile(KNOT_TIMES, x[2:])
     return sj.simulate_longitudinal(
-        VEHICLE, snow, torque, T1, DT, initial_speed=v0, adjoint=diffrax.ForwardMode()
+        VEHICLE,
+        snow,
+        torque,
+        T1,
+        DT,
+        initial=sj.InitialState(speed=v0),
+        stepping=sj.Stepping(adjoint=diffrax.ForwardMode()),
     )
 
 
@@ -300,13 +306,17 @@ def test_a_step_not_solved_even_when_retried_stops_the_integration():
     """With one iteration allowed, the steps from rest are not solved even at the step-size
     controller's smallest step: the root finder's failure is the result, and the rows
     after it hold inf states with `Status.INVALID_INPUT`."""
-    traj = sj.simulate_longitudinal(VEHICLE, SNOW, 545.0, 0.5, DT, newton_steps=1)
+    traj = sj.simulate_longitudinal(
+        VEHICLE, SNOW, 545.0, 0.5, DT, stepping=sj.Stepping(newton_steps=1)
+    )
     assert traj.result == diffrax.RESULTS.nonlinear_max_steps_reached
     assert float(traj.speed[0]) == 0.0 and np.all(np.isinf(np.asarray(traj.speed[1:])))
     assert np.all(np.asarray(traj.status[1:]) == Status.INVALID_INPUT)
     # The same run given a ContactModel in place of the terrain.
     model = sj.ContactModel(SNOW, shear=sj.JanosiHanamoto())
-    by_model = sj.simulate_longitudinal(VEHICLE, model, 545.0, 0.5, DT, newton_steps=1)
+    by_model = sj.simulate_longitudinal(
+        VEHICLE, model, 545.0, 0.5, DT, stepping=sj.Stepping(newton_steps=1)
+    )
     np.testing.assert_array_equal(by_model.speed, traj.speed)
     assert by_model.result == traj.result
 
@@ -321,15 +331,18 @@ def test_a_step_not_solved_even_when_retried_stops_the_integration():
     [
         (dict(dt=0.0), "dt"),
         (dict(t1=-1.0), "t1"),
-        (dict(speed_eps=0.0), "speed_eps"),
-        (dict(initial_speed=np.nan), "initial_speed"),
+        (dict(initial=sj.InitialState(speed=np.nan)), "initial.speed"),
+        (
+            dict(initial=sj.InitialState(yaw_rate=0.1)),
+            "drives straight: initial.yaw_rate must be 0",
+        ),
         (dict(vehicle=sj.Vehicle(-1.0, 1.5, WHEEL, 2)), "mass"),
         (dict(torque=sj.TorqueProfile([0.0, 1.0], [[1.0, 2.0, 3.0]] * 2)), "TorqueProfile"),
         (dict(torque=sj.TorqueProfile([1.0, 0.0], [1.0, 2.0])), "increasing"),
         (dict(torque=np.ones(3)), r"torque must be a number or one value per wheel, shape \(2,\)"),
         (dict(torque=lambda t, v, w: jnp.ones(3)), r"the torque controller returned shape \(3,\)"),
         (dict(snow=sj.WongSnow(np.nan, 0.2, 1e3, 0.1, 0.01)), "p_w"),
-        (dict(shear="simplified"), "braking extension"),
+        (dict(snow=sj.ContactModel(SNOW, shear="simplified")), "braking extension"),
     ],
 )
 def test_bad_input_raises(kwargs, match):
@@ -342,10 +355,16 @@ def test_bad_input_raises(kwargs, match):
         )
     with pytest.raises(ValueError, match="load"):
         sj.wheel_forces(1.0, 2.0, -5.0, WHEEL, SNOW)
+    with pytest.raises(ValueError, match="speed_eps must be finite and > 0"):
+        sj.Stepping(speed_eps=0.0)
+    with pytest.raises(ValueError, match="save_every must be a positive integer"):
+        sj.Stepping(save_every=0)
+    with pytest.raises(TypeError, match="adjoint must be a diffrax.AbstractAdjoint"):
+        sj.Stepping(adjoint="forward")
     with pytest.raises(ValueError, match="snow.p_w must be finite"):
         sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, sj.WongSnow(np.nan, 0.2, 1e3, 0.1, 0.01))
     with pytest.raises(ValueError, match="shear='simplified'"):
-        sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, SNOW, "simplified")
+        sj.wheel_forces(1.0, 2.0, 3000.0, WHEEL, sj.ContactModel(SNOW, shear="simplified"))
 
 
 # 45 s of a worker on 2 cores, compiling the forward-mode Jacobians of the notebook's

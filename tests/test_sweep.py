@@ -47,7 +47,7 @@ SHARDED_SCRIPT = textwrap.dedent(
         sj.RigidWheel.thesis_tire(),
         sj.WongSnow.thesis_fresh_snow(p_w=np.array([60e3, 85.55e3])),
         np.array([3000.0, 6000.0]), np.linspace(0.0, 0.8, 5),
-        out=sys.argv[1], chunk_size=8, progress=False, formats=("npz",),
+        out=sys.argv[1], progress=False, formats=("npz",), run=sj.SweepRun(chunk_size=8),
     )
     assert r.complete and r.computed_chunks == 3, r
     """
@@ -92,7 +92,9 @@ def background(request, tmp_path_factory):
 def reference(tmp_path_factory):
     """An uninterrupted single-device sweep: its directory and rows."""
     out = tmp_path_factory.mktemp("reference") / "sweep"
-    result = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    result = sj.sweep(
+        WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C)
+    )
     assert result.complete and result.computed_chunks == 3 and result.skipped_chunks == 0
     return out, sj.load_sweep(out)
 
@@ -177,9 +179,9 @@ def test_list_sweep_equals_solve_wheel(tmp_path):
         slips,
         grid=False,
         out=tmp_path / "s",
-        chunk_size=C,
         progress=False,
         formats=("npz",),
+        run=sj.SweepRun(chunk_size=C),
     )
     assert r.n_points == n and r.n_chunks == 2 and r.files == {"npz": tmp_path / "s/sweep.npz"}
     rows = sj.load_sweep(tmp_path / "s")
@@ -212,9 +214,8 @@ def test_interrupted_sweep_resumes_row_for_row(reference, tmp_path):
             LOADS,
             SLIPS,
             out=out,
-            chunk_size=C,
             progress=False,
-            callback=stop_after_first,
+            run=sj.SweepRun(chunk_size=C, callback=stop_after_first),
         )
     assert sorted(p.name for p in out.iterdir()) == ["chunk_000000.npz", "manifest.json"]
     with pytest.raises(ValueError, match="not finished"):
@@ -226,9 +227,8 @@ def test_interrupted_sweep_resumes_row_for_row(reference, tmp_path):
         LOADS,
         SLIPS,
         out=out,
-        chunk_size=C,
         progress=False,
-        callback=lambda k, path: seen.append(k),
+        run=sj.SweepRun(chunk_size=C, callback=lambda k, path: seen.append(k)),
     )
     assert seen == [1, 2] and r.computed_chunks == 2 and r.skipped_chunks == 1 and r.complete
     _assert_rows_equal(sj.load_sweep(out), ref_rows)
@@ -236,7 +236,7 @@ def test_interrupted_sweep_resumes_row_for_row(reference, tmp_path):
         assert (out / name).read_bytes() == (ref_out / name).read_bytes(), name
     # A finished sweep run again computes nothing and rewrites nothing.
     mtime = (out / "sweep.csv").stat().st_mtime_ns
-    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C))
     assert r.computed_chunks == 0 and r.complete
     assert (out / "sweep.csv").stat().st_mtime_ns == mtime
 
@@ -252,7 +252,9 @@ def test_damaged_files_are_detected_and_recomputed(reference, tmp_path):
     (out / "sweep.npz").write_bytes((out / "sweep.npz").read_bytes()[:-10])
     (out / "sweep.csv").unlink()
     with pytest.warns(UserWarning, match="chunk_000001.npz"):
-        r = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+        r = sj.sweep(
+            WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C)
+        )
     assert r.computed_chunks == 1 and r.skipped_chunks == 2 and r.complete
     assert not stray.exists()
     _assert_rows_equal(sj.load_sweep(out), ref_rows)
@@ -274,17 +276,34 @@ def test_a_different_sweep_is_refused(reference, tmp_path):
     out = tmp_path / "s"
     shutil.copytree(reference[0], out)
     # A ContactModel holding the same terrain is the same sweep: nothing left to compute.
-    r = sj.sweep(WHEEL, sj.ContactModel(SNOW), LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+    r = sj.sweep(
+        WHEEL,
+        sj.ContactModel(SNOW),
+        LOADS,
+        SLIPS,
+        out=out,
+        progress=False,
+        run=sj.SweepRun(chunk_size=C),
+    )
     assert r.complete and r.computed_chunks == 0 and r.skipped_chunks == r.n_chunks
     with pytest.raises(ValueError, match="chunk_size: 8 on disk, 4 now"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=4, progress=False)
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=4))
     with pytest.raises(ValueError, match="shear: 'classic' on disk, 'none' now"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, shear="none")
+        sj.sweep(
+            WHEEL,
+            sj.ContactModel(SNOW, shear="none"),
+            LOADS,
+            SLIPS,
+            out=out,
+            run=sj.SweepRun(chunk_size=C),
+        )
     with pytest.raises(ValueError, match="input values"):
-        sj.sweep(WHEEL, SNOW, LOADS + 1.0, SLIPS, out=out, chunk_size=C, progress=False)
+        sj.sweep(
+            WHEEL, SNOW, LOADS + 1.0, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C)
+        )
     (out / "manifest.json").unlink()
     with pytest.raises(ValueError, match="no manifest.json"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False)
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C))
     # resume=False starts over, deleting the sweep's files and nothing else.
     (out / "notes.txt").write_text("mine")
     r = sj.sweep(
@@ -293,10 +312,9 @@ def test_a_different_sweep_is_refused(reference, tmp_path):
         LOADS,
         SLIPS,
         out=out,
-        chunk_size=C,
         progress=False,
-        resume=False,
         formats=("npz",),
+        run=sj.SweepRun(chunk_size=C, resume=False),
     )
     assert r.computed_chunks == 3 and r.complete
     assert sorted(p.name for p in out.iterdir()) == [
@@ -341,11 +359,13 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
         LOADS,
         SLIPS,
         out=out,
-        chunk_size=C,
         progress=False,
-        process_index=0,
-        process_count=2,
-        callback=lambda k, p: written[0].append(k),
+        run=sj.SweepRun(
+            chunk_size=C,
+            process_index=0,
+            process_count=2,
+            callback=lambda k, p: written[0].append(k),
+        ),
     )
     assert written[0] == [0, 2] and not r0.complete and r0.files == {}
     assert not (out / "chunk_000001.npz").exists() and not (out / "sweep.csv").exists()
@@ -355,11 +375,13 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
         LOADS,
         SLIPS,
         out=out,
-        chunk_size=C,
         progress=False,
-        process_index=1,
-        process_count=2,
-        callback=lambda k, p: written[1].append(k),
+        run=sj.SweepRun(
+            chunk_size=C,
+            process_index=1,
+            process_count=2,
+            callback=lambda k, p: written[1].append(k),
+        ),
     )
     assert written[1] == [1] and r1.complete and set(r1.files) == {"npz", "csv"}
     _assert_rows_equal(sj.load_sweep(out), reference[1])
@@ -369,22 +391,33 @@ def test_chunks_are_dealt_to_processes(reference, tmp_path):
 def test_worker_processes_write_the_same_rows(reference, tmp_path):
     # Three local workers (this process and two pinned children) deal the 3 chunks.
     out = tmp_path / "w"
-    result = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False, workers=3)
+    result = sj.sweep(
+        WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C, workers=3)
+    )
     assert result.complete and result.computed_chunks == 3 and result.skipped_chunks == 0
     assert result.files and not list(out.glob(".chunk_*"))  # no temporary files left
     _assert_rows_equal(sj.load_sweep(out), reference[1])
     # A resume finds everything on disk and starts no worker.
-    again = sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C, progress=False, workers=3)
+    again = sj.sweep(
+        WHEEL, SNOW, LOADS, SLIPS, out=out, progress=False, run=sj.SweepRun(chunk_size=C, workers=3)
+    )
     assert again.complete and again.computed_chunks == 0 and again.skipped_chunks == 3
     # The default uses workers only for long CPU sweeps.
     d = _definition()
     assert d.n_points < _sweep.AUTO_WORKERS_POINTS
     assert _sweep._default_workers(d, [WHEEL, SNOW], (LOADS, SLIPS), (None,) * 4) == 1
     with pytest.raises(ValueError, match="workers must be >= 1"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "x", chunk_size=C, workers=0)
+        sj.sweep(
+            WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "x", run=sj.SweepRun(chunk_size=C, workers=0)
+        )
     with pytest.raises(ValueError, match="excludes devices"):
         sj.sweep(
-            WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "x", workers=2, callback=lambda k, p: None
+            WHEEL,
+            SNOW,
+            LOADS,
+            SLIPS,
+            out=tmp_path / "x",
+            run=sj.SweepRun(callback=lambda k, p: None, workers=2),
         )
 
 
@@ -405,22 +438,29 @@ def test_bad_inputs_raise_clear_errors(tmp_path):
         ),
         (dict(loads=np.ones((2, 2))), "loads must be a scalar or 1-D"),
         (dict(grid=False), "same length"),
-        (dict(chunk_size=0), "chunk_size must be a positive integer"),
+        (dict(run=sj.SweepRun(chunk_size=0)), "chunk_size must be a positive integer"),
         (dict(formats=("parquet",)), "formats must be among"),
-        (dict(shear="wet"), "shear must be one of"),
     ]
     for change, message in cases:
-        kw = dict(wheel=WHEEL, snow=SNOW, loads=LOADS, slips=SLIPS, out=out, chunk_size=C)
+        kw = dict(wheel=WHEEL, snow=SNOW, loads=LOADS, slips=SLIPS, out=out, run=sj.SweepRun(C))
         kw.update(change)
         with pytest.raises(ValueError, match=message):
             sj.sweep(**kw)
     with pytest.raises(TypeError, match="RigidWheel"):
         sj.sweep(SNOW, SNOW, LOADS, SLIPS, out=out)
+    with pytest.raises(TypeError, match=r"run must be a snowjax.SweepRun, got int"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, run=C)
+    with pytest.raises(TypeError, match=r"sweep\(chunk_size=...\) is now spelled run=SweepRun"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, chunk_size=C)
+    with pytest.raises(TypeError, match=r"sweep\(shear=...\) is now spelled ContactModel"):
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, shear="none")
     with pytest.raises(ValueError, match="process_index"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=out, process_index=2, process_count=2)
+        sj.sweep(
+            WHEEL, SNOW, LOADS, SLIPS, out=out, run=sj.SweepRun(process_index=2, process_count=2)
+        )
     (tmp_path / "file").write_text("")
     with pytest.raises(ValueError, match="not a directory"):
-        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "file", chunk_size=C)
+        sj.sweep(WHEEL, SNOW, LOADS, SLIPS, out=tmp_path / "file", run=sj.SweepRun(chunk_size=C))
     assert not out.exists()  # nothing written for a bad definition
 
 
@@ -571,7 +611,9 @@ def test_a_deflecting_tire_sweeps_like_solve_wheel(tmp_path):
     tire = sj.DeflectingTire(0.736, 0.235, 0.176, inflation, 5e3, hard_surface_resistance=0.015)
     snow = sj.WongSnow.thesis_fresh_snow()
     slips = np.array([0.2, -0.2])
-    r = sj.sweep(tire, snow, 4000.0, slips, out=tmp_path / "s", chunk_size=C, progress=False)
+    r = sj.sweep(
+        tire, snow, 4000.0, slips, out=tmp_path / "s", progress=False, run=sj.SweepRun(chunk_size=C)
+    )
     assert r.n_points == 4
     rows = sj.load_sweep(tmp_path / "s")
     assert list(rows)[:5] == ["index", "param_set", "load", "slip", "inflation_pressure"]
@@ -589,4 +631,12 @@ def test_a_deflecting_tire_sweeps_like_solve_wheel(tmp_path):
     assert manifest["definition"]["wheel"] == "DeflectingTire"
     bad = sj.DeflectingTire(0.736, 0.235, 0.176, np.array([1e5, 0.0]), 5e3)
     with pytest.raises(ValueError, match="tire.inflation_pressure must be finite and > 0 Pa"):
-        sj.sweep(bad, snow, 4000.0, slips, out=tmp_path / "bad", chunk_size=C, progress=False)
+        sj.sweep(
+            bad,
+            snow,
+            4000.0,
+            slips,
+            out=tmp_path / "bad",
+            progress=False,
+            run=sj.SweepRun(chunk_size=C),
+        )

@@ -41,11 +41,13 @@ def _full(tree, n=N):
 def _solve(terrain, load, slip, distribution=DIST, wheel=WHEEL, shear="classic"):
     return sj.solve_wheel(
         _full(wheel),
-        _full(terrain),
+        sj.ContactModel(
+            _full(terrain),
+            distribution=None if distribution is None else _full(distribution),
+            shear=shear,
+        ),
         np.broadcast_to(load, (N,)),
         np.broadcast_to(slip, (N,)),
-        shear,
-        distribution=None if distribution is None else _full(distribution),
     )
 
 
@@ -89,24 +91,27 @@ def test_fit_names_and_transforms():
     assert names == ("c1", "k_c") and targets == (("distribution", "c1"), ("terrain", "k_c"))
     soil, dist = _start()
     base = dict(
-        wheel=WHEEL, snow=soil, load=LOADS, slip=SLIPS, sinkage=np.ones(N), distribution=dist
-    )
+        wheel=WHEEL, snow=sj.ContactModel(soil, dist), load=LOADS, slip=SLIPS,
+        measured={"sinkage": np.ones(N)},
+    )  # fmt: skip
     with pytest.raises(ValueError, match=r"unknown parameter.*'p_w'.*allowed:.*'k_phi'.*'c1'"):
         sj.fit_wheel(**base, fit=("p_w",))
     with pytest.raises(ValueError, match="twice"):
         sj.fit_wheel(**base, fit=("c1", "distribution.c1"))
     with pytest.raises(ValueError, match="simplified"):
-        sj.fit_wheel(**base, fit=("n",), shear="simplified")
+        sj.fit_wheel(**{**base, "snow": sj.ContactModel(soil, shear="simplified")}, fit=("n",))
     with pytest.raises(ValueError, match=r"snow.n must be finite and > 0"):
-        sj.fit_wheel(**{**base, "snow": eqx.tree_at(lambda t: t.n, soil, 0.0)}, fit=("n",))
+        bad = sj.ContactModel(eqx.tree_at(lambda t: t.n, soil, 0.0), dist)
+        sj.fit_wheel(**{**base, "snow": bad}, fit=("n",))
     with pytest.raises(ValueError, match=r"c1 \+ c2 \* slip must be finite and in \[0, 1\)"):
-        sj.fit_wheel(**{**base, "distribution": sj.WongReece(0.9, 0.32)}, fit=("n",))
+        bad = sj.ContactModel(soil, sj.WongReece(0.9, 0.32))
+        sj.fit_wheel(**{**base, "snow": bad}, fit=("n",))
 
 
 @pytest.mark.slow  # a fit on the any-terrain rule (make test-slow)
 def test_fit_wheel_recovers_bekker_and_wong_reece_noise_free(synthetic):
     soil, dist = _start()
-    res = sj.fit_wheel(WHEEL, soil, LOADS, SLIPS, fit=FITTED, distribution=dist, **synthetic)
+    res = sj.fit_wheel(WHEEL, sj.ContactModel(soil, dist), LOADS, SLIPS, synthetic, fit=FITTED)
     assert res.success and list(res.params) == list(FITTED)
     for name in FITTED:
         assert res.params[name] == pytest.approx(_true(name), rel=1e-6), name
@@ -126,7 +131,7 @@ def test_fit_wheel_recovers_bekker_and_wong_reece_with_noise(synthetic):
     data = {q: y + 0.01 * np.sqrt(np.mean(y**2)) * rng.standard_normal(N)
             for q, y in synthetic.items()}  # fmt: skip
     soil, dist = _start()
-    res = sj.fit_wheel(WHEEL, soil, LOADS, SLIPS, fit=FITTED, distribution=dist, **data)
+    res = sj.fit_wheel(WHEEL, sj.ContactModel(soil, dist), LOADS, SLIPS, data, fit=FITTED)
     assert res.success and res.dof == 2 * N - 3
     for name in FITTED:
         got, se, true = res.params[name], res.stderr[name], _true(name)
@@ -215,8 +220,15 @@ def bekker_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("bekker") / "sweep"
     soil = eqx.tree_at(lambda t: t.k_phi, BEKKER, K_PHI)
     dist = sj.WongReece(c1=C1, c2=DIST.c2, c3=DIST.c3)
-    r = sj.sweep(WHEEL, soil, SWEEP_LOADS, SWEEP_SLIPS, distribution=dist, out=out,
-                 chunk_size=N, progress=False)  # fmt: skip
+    r = sj.sweep(
+        WHEEL,
+        sj.ContactModel(soil, dist),
+        SWEEP_LOADS,
+        SWEEP_SLIPS,
+        out=out,
+        progress=False,
+        run=sj.SweepRun(chunk_size=N),
+    )
     assert r.complete and r.n_points == N and r.computed_chunks == 1
     return out, soil, dist
 
@@ -231,10 +243,14 @@ def test_sweep_bekker_wong_reece_equals_solve_wheel(bekker_sweep):
     np.testing.assert_array_equal(rows["k_phi"], K_PHI[p])
     np.testing.assert_array_equal(rows["c1"], C1[p])
     st = sj.solve_wheel(
-        _full(WHEEL), eqx.tree_at(lambda t: t.k_phi, _full(BEKKER), K_PHI[p]),
-        rows["load"], rows["slip"],
-        distribution=sj.WongReece(C1[p], _full(DIST).c2, _full(DIST).c3),
-    )  # fmt: skip
+        _full(WHEEL),
+        sj.ContactModel(
+            eqx.tree_at(lambda t: t.k_phi, _full(BEKKER), K_PHI[p]),
+            sj.WongReece(C1[p], _full(DIST).c2, _full(DIST).c3),
+        ),
+        rows["load"],
+        rows["slip"],
+    )
     assert (rows["status"] == 0).all()
     for name in (
         "entry_angle",
@@ -248,13 +264,34 @@ def test_sweep_bekker_wong_reece_equals_solve_wheel(bekker_sweep):
         np.testing.assert_array_equal(rows[name], np.asarray(getattr(st, name)), err_msg=name)
     # A different terrain or distribution in the same directory is refused.
     with pytest.raises(ValueError, match="terrain: 'BekkerSoil' on disk, 'WongSnow' now"):
-        sj.sweep(WHEEL, sj.WongSnow.thesis_fresh_snow(), SWEEP_LOADS, SWEEP_SLIPS, out=out,
-                 chunk_size=N, progress=False)  # fmt: skip
+        sj.sweep(
+            WHEEL,
+            sj.WongSnow.thesis_fresh_snow(),
+            SWEEP_LOADS,
+            SWEEP_SLIPS,
+            out=out,
+            progress=False,
+            run=sj.SweepRun(chunk_size=N),
+        )
     with pytest.raises(ValueError, match="distribution: 'WongReece' on disk, None now"):
-        sj.sweep(WHEEL, soil, SWEEP_LOADS, SWEEP_SLIPS, out=out, chunk_size=N, progress=False)
+        sj.sweep(
+            WHEEL,
+            soil,
+            SWEEP_LOADS,
+            SWEEP_SLIPS,
+            out=out,
+            progress=False,
+            run=sj.SweepRun(chunk_size=N),
+        )
     with pytest.raises(ValueError, match=r"c1 \+ c2 \* slip must be finite and in \[0, 1\)"):
-        sj.sweep(WHEEL, soil, SWEEP_LOADS, SWEEP_SLIPS, distribution=sj.WongReece(0.8, 0.32),
-                 out=out, chunk_size=N)  # fmt: skip
+        sj.sweep(
+            WHEEL,
+            sj.ContactModel(soil, sj.WongReece(0.8, 0.32)),
+            SWEEP_LOADS,
+            SWEEP_SLIPS,
+            out=out,
+            run=sj.SweepRun(chunk_size=N),
+        )
     layered = sj.LayeredSnow.ice_layer_example()
     d = _sweep._define(WHEEL, layered, SWEEP_LOADS, SWEEP_SLIPS, grid=True, shear="classic",
                           chunk_size=N, nodes_per_panel=None, max_steps=64)  # fmt: skip
@@ -317,9 +354,14 @@ def test_simulation_on_bekker_wong_reece_reaches_the_self_propelled_state():
     torque = float(_solve(BEKKER, LOAD, slip_star).torque[0])
     vehicle = sj.Vehicle(mass=2 * LOAD / 9.80665, wheel_inertia=0.5, wheel=WHEEL, num_wheels=2)
     traj = sj.simulate_longitudinal(
-        vehicle, BEKKER, torque, 10.0, 0.05, initial_speed=1.0, distribution=DIST,
-        adjoint=diffrax.ForwardMode(),
-    )  # fmt: skip
+        vehicle,
+        sj.ContactModel(BEKKER, DIST),
+        torque,
+        10.0,
+        0.05,
+        initial=sj.InitialState(speed=1.0),
+        stepping=sj.Stepping(adjoint=diffrax.ForwardMode()),
+    )
     assert traj.result == diffrax.RESULTS.successful
     for name in ("speed", "wheel_speed", "slip", "sinkage", "drawbar_pull", "resisting_torque"):
         assert np.all(np.isfinite(np.asarray(getattr(traj, name)))), name

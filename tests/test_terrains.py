@@ -112,7 +112,7 @@ def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
     """W, R, T, M within 1e-7 (relative; 1e-3 W as the floor of the scale) of quad."""
     cases = random_cases(kind, 12, seed=hash((kind, wong_reece)) % 1000)
     wheel, terrain, dist, stack = batch(kind, cases, wong_reece)
-    f = sj.contact_forces(wheel, terrain, stack("th"), stack("slip"), distribution=dist)
+    f = sj.contact_forces(wheel, sj.ContactModel(terrain, dist), stack("th"), stack("slip"))
     got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
     for k, c in enumerate(cases):
         law, z_f = law_of(kind, c)
@@ -211,9 +211,9 @@ def test_equilibrium_matches_brentq(kind, wong_reece):
     dist = sj.WongReece(0.43, 0.32) if wong_reece else None
     loads = np.array([p[0] for p in points])
     slips = np.array([p[1] for p in points])
-    st = sj.solve_wheel(wheel, terrain, loads, slips, distribution=dist)
+    st = sj.solve_wheel(wheel, sj.ContactModel(terrain, dist), loads, slips)
     assert np.all(st.status == Status.CONVERGED), st.status
-    f = sj.contact_forces(wheel, terrain, st.entry_angle, slips, distribution=dist)
+    f = sj.contact_forces(wheel, sj.ContactModel(terrain, dist), st.entry_angle, slips)
     assert np.max(np.abs(f.vertical_load / loads - 1)) <= 1e-8
     law, z_f = _ref_law(terrain)
     c, tp, K = _strength(terrain)
@@ -258,7 +258,7 @@ def test_done_means_batched_loads_slips_parameter_sets():
         sets = jax.tree_util.tree_map(
             lambda x: jnp.asarray(x) * jnp.array([1.0, 1.1])[:, None, None], terrain
         )
-        st = sj.solve_wheel(wheel, sets, loads, slips, distribution=dist)
+        st = sj.solve_wheel(wheel, sj.ContactModel(sets, dist), loads, slips)
         assert st.sinkage.shape == (2, 3, 4), kind
         assert np.all(
             np.isin(
@@ -269,10 +269,9 @@ def test_done_means_batched_loads_slips_parameter_sets():
         assert np.all(np.isfinite(st.drawbar_pull)) and np.all(np.isfinite(st.torque))
         one = sj.solve_wheel(
             wheel,
-            jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets),
+            sj.ContactModel(jax.tree_util.tree_map(lambda x: x[1, 0, 0], sets), dist),
             2000.0,
             0.3,
-            distribution=dist,
         )
         # The single driving case uses the 12-node rule, the braking batch the 16-node one.
         assert float(one.sinkage) == pytest.approx(float(st.sinkage[1, 1, 2]), rel=1e-8)
@@ -293,7 +292,7 @@ def test_gradients_wrt_k_phi_n_c1_match_central_differences():
         s = sj.BekkerSoil(
             n, soil.k_c, k_phi, soil.cohesion, soil.tan_phi, shear_modulus=soil.shear_modulus
         )
-        st = sj.solve_wheel(wheel, s, loads, slips, distribution=sj.WongReece(c1, 0.32))
+        st = sj.solve_wheel(wheel, sj.ContactModel(s, sj.WongReece(c1, 0.32)), loads, slips)
         return jnp.stack([st.sinkage, st.drawbar_pull / 1e3, st.torque / 1e3])
 
     x0 = (800e3, 1.1, 0.43)
@@ -405,18 +404,22 @@ def test_throw_raises_the_message_of_the_first_failed_element():
 def test_refused_combinations_and_bad_types():
     wheel = sj.RigidWheel(1.0, 0.4)
     with pytest.raises(ValueError, match="simplified"):
-        sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, "simplified")
+        sj.solve_wheel(
+            wheel, sj.ContactModel(sj.BekkerSoil.snow_us(), shear="simplified"), 1000.0, 0.2
+        )
     with pytest.raises(ValueError, match="simplified"):
         sj.solve_wheel(
             wheel,
-            sj.WongSnow.thesis_fresh_snow(),
+            sj.ContactModel(
+                sj.WongSnow.thesis_fresh_snow(),
+                distribution=sj.WongReece(0.43, 0.32),
+                shear="simplified",
+            ),
             1000.0,
             0.2,
-            "simplified",
-            distribution=sj.WongReece(0.43, 0.32),
         )
     with pytest.raises(TypeError, match="distribution"):
-        sj.solve_wheel(wheel, sj.BekkerSoil.snow_us(), 1000.0, 0.2, distribution=(0.43, 0.32))
+        sj.solve_wheel(wheel, sj.ContactModel(sj.BekkerSoil.snow_us(), (0.43, 0.32)), 1000.0, 0.2)
     with pytest.raises(TypeError, match="terrain"):
         sj.solve_wheel(wheel, wheel, 1000.0, 0.2)
 
@@ -462,8 +465,10 @@ def test_refused_combinations_and_bad_types():
 def test_invalid_values_raise_eagerly_and_flag_under_jit(name, terrain, dist, slip):
     wheel = sj.RigidWheel(1.0, 0.4)
     with pytest.raises(ValueError, match=re.escape(name)):
-        sj.solve_wheel(wheel, terrain, 1000.0, slip, distribution=dist)
-    st = jax.jit(lambda t, d: sj.solve_wheel(wheel, t, 1000.0, slip, distribution=d))(terrain, dist)
+        sj.solve_wheel(wheel, sj.ContactModel(terrain, dist), 1000.0, slip)
+    st = jax.jit(lambda t, d: sj.solve_wheel(wheel, sj.ContactModel(t, d), 1000.0, slip))(
+        terrain, dist
+    )
     assert int(st.status) == Status.INVALID_INPUT and np.isnan(float(st.sinkage))
 
 
@@ -475,17 +480,16 @@ def test_float32_general_path_has_no_nan():
     loads = rng.uniform(500, 8000, len(cases))
     st = sj.solve_wheel(
         f32(wheel),
-        f32(terrain),
+        sj.ContactModel(f32(terrain), f32(dist)),
         np.float32(loads),
         np.float32(stack("slip")),
-        distribution=f32(dist),
     )
     assert st.sinkage.dtype == jnp.float32
     ok = np.asarray(st.status) != Status.INVALID_INPUT
     assert ok.all()
     for field in ("sinkage", "drawbar_pull", "torque", "motion_resistance"):
         assert np.all(np.isfinite(getattr(st, field))), field
-    st64 = sj.solve_wheel(wheel, terrain, loads, stack("slip"), distribution=dist)
+    st64 = sj.solve_wheel(wheel, sj.ContactModel(terrain, dist), loads, stack("slip"))
     both = (np.asarray(st.status) == 0) & (np.asarray(st64.status) == 0)
     assert both.sum() > 40
     assert np.max(np.abs(np.asarray(st.sinkage)[both] / np.asarray(st64.sinkage)[both] - 1)) < 1e-3

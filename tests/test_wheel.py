@@ -77,7 +77,7 @@ def test_contact_integrals_match_scipy_quad(integral_cases, shear):
     x = integral_cases
     wheel = sj.RigidWheel(x["D"], x["b"])
     snow = sj.WongSnow(x["p_w"], x["z_w"], x["c"], x["tan_phi"], x["K"])
-    got = sj.contact_forces(wheel, snow, x["theta0"], x["slip"], shear)
+    got = sj.contact_forces(wheel, sj.ContactModel(snow, shear=shear), x["theta0"], x["slip"])
     got = np.stack([got.vertical_load, got.motion_resistance, got.thrust, got.torque], 1)
     want = np.array(
         [
@@ -108,7 +108,9 @@ def test_contact_integrals_match_scipy_quad(integral_cases, shear):
     err = (np.abs(got - want) / scale).max(axis=1)
     assert err.max() <= 1e-7, (shear, err.max())
     np.testing.assert_allclose(
-        sj.contact_forces(wheel, snow, x["theta0"], x["slip"], shear).drawbar_pull,
+        sj.contact_forces(
+            wheel, sj.ContactModel(snow, shear=shear), x["theta0"], x["slip"]
+        ).drawbar_pull,
         want[:, 2] - want[:, 1] if shear != "none" else -want[:, 1],
         rtol=1e-6,
         atol=1e-6 * np.abs(want[:, 0]).max(),
@@ -152,7 +154,9 @@ def thesis_solutions():
     out = {}
     for name, snow, scale in (("fresh", FRESH, 1.0), ("plate", PLATE, 0.25)):
         for shear in SHEARS:
-            out[name, shear] = sj.solve_wheel(THESIS_WHEEL, snow, EQ_LOADS * scale, EQ_SLIPS, shear)
+            out[name, shear] = sj.solve_wheel(
+                THESIS_WHEEL, sj.ContactModel(snow, shear=shear), EQ_LOADS * scale, EQ_SLIPS
+            )
     return out
 
 
@@ -182,7 +186,9 @@ def test_equilibrium_matches_brentq(thesis_solutions, name, snow, scale, shear):
 @pytest.mark.parametrize("shear", SHEARS)
 def test_load_balance(thesis_solutions, shear):
     st = thesis_solutions["fresh", shear]
-    f = sj.contact_forces(THESIS_WHEEL, FRESH, st.entry_angle, EQ_SLIPS, shear)
+    f = sj.contact_forces(
+        THESIS_WHEEL, sj.ContactModel(FRESH, shear=shear), st.entry_angle, EQ_SLIPS
+    )
     assert np.max(np.abs(f.vertical_load / EQ_LOADS - 1)) <= 1e-8
 
 
@@ -274,7 +280,7 @@ def test_jit_vmap_agree_with_eager():
 
 def _outputs(p, which):
     snow = sj.WongSnow(p["p_w"], p["z_w"], p["cohesion"], p["tan_phi"], p["shear_modulus"])
-    st = sj.solve_wheel(THESIS_WHEEL, snow, p["load"], p["slip"], which)
+    st = sj.solve_wheel(THESIS_WHEEL, sj.ContactModel(snow, shear=which), p["load"], p["slip"])
     return jnp.stack([st.sinkage, st.motion_resistance, st.drawbar_pull, st.torque])
 
 
@@ -437,10 +443,13 @@ def test_invalid_input_gives_status_under_jit():
 def test_simplified_model_needs_cohesion_and_bad_model_name():
     with pytest.raises(ValueError, match="cohesion"):
         sj.solve_wheel(
-            THESIS_WHEEL, sj.WongSnow(85e3, 0.2, 0.0, 0.08, 0.01), 5000.0, 0.2, "simplified"
+            THESIS_WHEEL,
+            sj.ContactModel(sj.WongSnow(85e3, 0.2, 0.0, 0.08, 0.01), shear="simplified"),
+            5000.0,
+            0.2,
         )
     with pytest.raises(ValueError, match="shear must be one of"):
-        sj.solve_wheel(THESIS_WHEEL, FRESH, 5000.0, 0.2, "janosi")
+        sj.solve_wheel(THESIS_WHEEL, sj.ContactModel(FRESH, shear="janosi"), 5000.0, 0.2)
     with pytest.raises(TypeError):
         sj.solve_wheel(FRESH, THESIS_WHEEL, 5000.0, 0.2)
 
@@ -532,10 +541,9 @@ def test_float32_bottomed_out_braking_is_not_nan():
         c = lambda x: np.asarray(x, dtype)  # noqa: E731, B023
         states[dtype] = sj.solve_wheel(
             sj.RigidWheel(*map(c, args["wheel"])),
-            sj.WongSnow(*map(c, args["snow"])),
+            sj.ContactModel(sj.WongSnow(*map(c, args["snow"])), shear="simplified"),
             c(args["load"]),
             c(args["slip"]),
-            shear="simplified",
         )
     for state in states.values():
         assert int(state.status) == Status.BOTTOMED_OUT
@@ -579,7 +587,7 @@ def test_braking_gradients_match_central_differences(shear):
         q = x | p
         wheel = sj.RigidWheel(q["D"], q["b"])
         snow = sj.WongSnow(q["p_w"], q["z_w"], q["c"], q["tan_phi"], q["K"])
-        st = sj.solve_wheel(wheel, snow, q["load"], q["slip"], shear=shear)
+        st = sj.solve_wheel(wheel, sj.ContactModel(snow, shear=shear), q["load"], q["slip"])
         return st.drawbar_pull, st.motion_resistance + jnp.abs(st.thrust), st.status
 
     f = jax.jit(drawbar_pull)
@@ -610,7 +618,7 @@ def test_simplified_braking_sign_change_next_to_the_axle():
     args = [x[q][k] for q in ("D", "b", "p_w", "z_w", "c", "tan_phi", "K")]
     wheel = sj.RigidWheel(*args[:2])
     snow = sj.WongSnow(*args[2:])
-    got = sj.contact_forces(wheel, snow, x["theta0"][k], slip, "simplified")
+    got = sj.contact_forces(wheel, sj.ContactModel(snow, shear="simplified"), x["theta0"][k], slip)
     want = ref.contact_integrals(x["theta0"][k], slip, *args, "simplified")
     got = np.array([got.vertical_load, got.motion_resistance, got.thrust, got.torque])
     assert slip == pytest.approx(-0.013262, rel=1e-4)  # the case described above

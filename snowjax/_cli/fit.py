@@ -339,6 +339,7 @@ def run(args) -> int:
     from .._fit.tire import fit_tire_coefficients
     from .._fit.wheel import fit_parameter_names, fit_wheel
     from .._wheel.geometry import RigidWheel
+    from .._wheel.model import ContactModel
 
     try:
         if kind == "plate":
@@ -381,10 +382,10 @@ def run(args) -> int:
                 ("sinkage", "sinkage_m"), ("drawbar_pull", "drawbar_pull_N"),
                 ("motion_resistance", "motion_resistance_N")) if c in cols}  # fmt: skip
             result = fit_wheel(
-                RigidWheel(args.diameter, args.width), snow,
-                np.array(cols["load_N"]), np.array(cols["slip"]),
-                fit=names, shear=args.shear, max_steps=args.max_steps,
-                distribution=distribution, **measured,
+                RigidWheel(args.diameter, args.width),
+                ContactModel(snow, distribution, args.shear),
+                np.array(cols["load_N"]), np.array(cols["slip"]), measured,
+                fit=names, max_steps=args.max_steps,
             )  # fmt: skip
     except (ValueError, TypeError) as e:
         return _fail(f"{path}: {e}")

@@ -543,28 +543,25 @@ def run(args) -> int:
                 process_id=args.process_id,
                 **heartbeat,
             )
-        from .._sweep.sweep import rate_text, sweep
+        from .._sweep.sweep import SweepRun, rate_text, sweep
+        from .._wheel.model import ContactModel
 
         wheel, snow, distribution, loads, slips, formats = _build(args)
         n_sets = max([1, *(np.size(x) for x in jax.tree_util.tree_leaves((wheel, snow)))])
         n_points = len(loads) if args.list else len(loads) * len(slips) * n_sets
         _check_output_size(args.out, n_points, formats)
+        model = ContactModel(snow, distribution, args.shear, nodes_per_panel=args.nodes_per_panel)
         result = sweep(
             wheel,
-            snow,
+            model,
             loads,
             slips,
-            shear=args.shear,
-            distribution=distribution,
             out=args.out,
-            chunk_size=args.chunk_size,
             grid=not args.list,
-            progress=not args.no_progress,
-            resume=not args.restart,
             formats=formats,
-            nodes_per_panel=args.nodes_per_panel,
+            progress=not args.no_progress,
             max_steps=args.max_steps,
-            workers=args.workers,
+            run=SweepRun(args.chunk_size, resume=not args.restart, workers=args.workers),
         )
     except ValueError as err:
         message = str(err).removeprefix("sweep: ")

@@ -31,12 +31,10 @@ from .._tire.tire import (
     _forces,
     tire_parameters,
 )
-from .._wheel.contact import ShearModel
-from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
 from .._wheel.geometry import AbstractWheel
-from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.shear_law import _shear_law
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]
 
@@ -120,6 +118,7 @@ def _combine_jit(state: WheelState, load, slip, slip_angle, coefficients, parame
     )
 
 
+@_takes_model(positional=5)
 def tire_forces_on_snow(
     wheel: AbstractWheel,
     terrain: Terrain | ContactModel,
@@ -127,8 +126,6 @@ def tire_forces_on_snow(
     slip: Float[ArrayLike, "..."],
     slip_angle: Float[ArrayLike, "..."],
     *,
-    shear: ShearModel | AbstractShearLaw = "classic",
-    distribution: AbstractStressDistribution | None = None,
     coefficients: TireCoefficients | None = None,
     parameters: TireParameters | None = None,
 ) -> TireOnSnowForces:
@@ -138,7 +135,7 @@ def tire_forces_on_snow(
     **What is computed, and where each quantity comes from:**
 
     1. *Sinkage and motion resistance (chapter 4).*  `solve_wheel(wheel, terrain, load,
-       slip, shear, distribution=distribution)`: the entry angle with W(θ0) = F_z (4.14),
+       slip)` (`terrain` a terrain or a `ContactModel`): the entry angle with W(θ0) = F_z (4.14),
        the sinkage z0 (4.15) and the motion resistance R_x (4.16), for the wheel running
        straight (no slip angle).
     2. *Tyre parameters (chapter 3).*  C_s, C_α, μ_x, μ_y, E1 from the load functions
@@ -172,8 +169,8 @@ def tire_forces_on_snow(
       broadcast shape of (wheel, terrain, load, slip), not per slip angle.
     - R_x acts along the wheel heading: it is the horizontal resultant of the radial
       normal stress on the rim, which lies in the wheel's plane.  No lateral resistance
-      (sidewall bulldozing) is added; `solve_wheel(..., slip_angle=..., lateral=
-      snowjax.Lateral(bulldozing=True))` has one.
+      (sidewall bulldozing) is added; `solve_wheel(ContactModel(..., lateral=
+      snowjax.Lateral(bulldozing=True)), ..., slip_angle=...)` has one.
     - The load functions were fitted for 3.5–7.5 kN on a 0.736 m tyre: use
       `RigidWheel.thesis_tire()` (0.736 m × 0.235 m) and a load in that range for a
       consistent pair; other wheels and loads are extrapolations of chapter 3.
@@ -185,15 +182,15 @@ def tire_forces_on_snow(
       [`snowjax.DeflectingTire`][] (its sinkage and motion resistance those of the tyre
       that flattens; `snowjax reproduce` Fig. T.3).
     - `terrain`: any [`snowjax.Terrain`][], e.g. `WongSnow.thesis_fresh_snow()`, or a
-      [`snowjax.ContactModel`][] (then leave `shear` and `distribution` out).
+      [`snowjax.ContactModel`][]: the shear model of the chapter-4 equilibrium
+      (`JanosiHanamoto()` / `"classic"` (4.11), `ThesisSimplified()` / `"simplified"`
+      (4.13) or `NoShear()` / `"none"`; see [`snowjax.solve_wheel`][]), the stress
+      distribution (the front region, [`snowjax.WongReece`][] or another) and force
+      terms.
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [−1, 1]: 0 free rolling, 1 spinning in place,
       negative braking.
     - `slip_angle`: α [rad], |α| < π/2; the lateral force has its sign.
-    - `shear`: the shear model of the chapter-4 equilibrium, `"classic"` (4.11),
-      `"simplified"` (4.13) or `"none"` (see [`snowjax.solve_wheel`][]).
-    - `distribution`: None or `FrontRegion()` (the thesis's front region),
-      [`snowjax.WongReece`][] or another stress distribution.
     - `coefficients`: [`snowjax.TireCoefficients`][] of the load functions (**kN units**);
       default the thesis's.
     - `parameters`: [`snowjax.TireParameters`][] (C_s, C_α in N/rad) used instead of the
@@ -210,7 +207,7 @@ def tire_forces_on_snow(
     Example: `snowjax.tire_forces_on_snow(snowjax.RigidWheel.thesis_tire(),
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
-    terrain, shear, distribution, _, _, terms = _unpack_model(terrain, shear, distribution)
+    terrain, shear, distribution, _, _, terms = _unpack_model(terrain)
     shear = _shear_law(shear)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")

@@ -4,11 +4,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import jax.numpy as jnp
 import numpy as np
 
+from .._wheel.model import _takes_model, _unpack_model
 from .common import (
     ICE_DENSITY,
     _positive,
@@ -19,9 +21,7 @@ from .models import (
     richmond_resistance,
     van_es_rolling_resistance,
 )
-from .traction import (
-    brixius,
-)
+from .traction import brixius as _brixius
 
 # Default sigma_i for the comparison: the compaction law p = sigma_i exp(-lambda r^2) with
 # lambda = 1 reaches rho_f = 500 kg/m^3 at 210 kPa — CRREL's final-density rule for tyres
@@ -31,22 +31,59 @@ _CRREL_PRESSURE = 210e3  # [Pa]
 DEFAULT_ICE_PRESSURE = _CRREL_PRESSURE * math.exp((ICE_DENSITY / _CRREL_FINAL_DENSITY - 1) ** 2)
 
 
+@dataclasses.dataclass(frozen=True)
+class SnowCover:
+    """The snow cover that the empirical models of `compare_motion_resistance` read
+    (Richmond 2.23, Van Es 2.26).
+
+    - `density`: initial density rho_0 [kg/m^3] (default 200, Shoop's laboratory snow).
+    - `depth`: snow depth h_0 [m] (default None: z_w of the Wong snow).
+    - `ice_pressure`: sigma_i of Van Es's compaction law [Pa] (default 421 kPa: the law
+      reaches CRREL's 500 kg/m^3 at 210 kPa; an assumption, not a thesis value).
+    - `grain_index`: lambda of Van Es's compaction law [-] (default 1).
+    - `hard_surface_coefficient`: f_r of Van Es's D_r = f_r W [-] (default 0: only the
+      snow's share).
+    """
+
+    density: float = 200.0
+    depth: float | None = None
+    ice_pressure: float = DEFAULT_ICE_PRESSURE
+    grain_index: float = 1.0
+    hard_surface_coefficient: float = 0.0
+
+
+@dataclasses.dataclass(frozen=True)
+class BrixiusTyre:
+    """Brixius's inputs (eq. 2.20) for `compare_motion_resistance`'s `brixius` column:
+    the soil's cone index [Pa] and the tyre's section height [m] and deflection [m]."""
+
+    cone_index: float
+    section_height: float
+    deflection: float = 0.0
+
+
+_MOVED_TO_COVER = {
+    "density": "cover=SnowCover(density=...)",
+    "snow_depth": "cover=SnowCover(depth=...)",
+    "ice_pressure": "cover=SnowCover(ice_pressure=...)",
+    "grain_index": "cover=SnowCover(grain_index=...)",
+    "hard_surface_coefficient": "cover=SnowCover(hard_surface_coefficient=...)",
+    "cone_index": "brixius=BrixiusTyre(cone_index, section_height, deflection)",
+    "section_height": "brixius=BrixiusTyre(cone_index, section_height, deflection)",
+    "deflection": "brixius=BrixiusTyre(cone_index, section_height, deflection)",
+}
+
+
+@_takes_model(positional=1, **_MOVED_TO_COVER)
 def compare_motion_resistance(
     loads=None,
     *,
     wheel=None,
     wong_snow=None,
     bekker_snow=None,
-    density: float = 200.0,
-    snow_depth: float | None = None,
     slip: float = 0.0,
-    ice_pressure: float = DEFAULT_ICE_PRESSURE,
-    grain_index: float = 1.0,
-    hard_surface_coefficient: float = 0.0,
-    cone_index: float | None = None,
-    section_height: float | None = None,
-    deflection: float = 0.0,
-    shear: str = "classic",
+    cover: SnowCover = SnowCover(),
+    brixius: BrixiusTyre | None = None,
 ):
     """Motion resistance versus wheel load for every model of the project, one snow, one tyre.
 
@@ -56,21 +93,21 @@ def compare_motion_resistance(
       snow `wong_snow` at slip `slip` (via `snowjax.solve_wheel`).
     - `bekker`: Bekker's closed form (2.25) with the Bekker fit `bekker_snow` (unlimited
       depth).  `bekker_sinkage` (its z0) is reported too.
-    - `richmond`: Richmond (2.23) with rho_0 = `density` and the contact arc
+    - `richmond`: Richmond (2.23) with rho_0 = `cover.density` and the contact arc
       a = r theta_0, theta_0 the rigid wheel's entry angle (the rut the same tyre makes
       in the same snow).  Without the rigid-wheel solver, a = r arccos(1 - z0/r) from
       Bekker's sinkage z0 instead (flagged in `table["richmond_contact"]`).
-    - `van_es`: Van Es (2.26) with D_r = `hard_surface_coefficient` W (default 0: only the
-      snow's share, like the other models), D_d = 0, rho_0 = `density`, h_0 =
-      `snow_depth`, lambda = `grain_index`, sigma_i = `ice_pressure`, and the final density
-      from mass conservation in the rut of the rigid wheel:
-      rho_f = min(rho_0 h_0 / (h_0 - z0), rho_i), z0 the rigid-wheel sinkage.
-      The default sigma_i = 421 kPa makes Van Es's compaction law reach 500 kg/m^3 at
-      210 kPa — CRREL's final-density rule for tyres with peak contact pressure up to
-      210 kPa (Richmond 1995, CRREL Report 95-7).  It is an assumption, not a thesis value.
-    - `brixius` (only when `cone_index` is given — the thesis gives no cone index for its
-      snow): mu_R W from eq. (2.20) (`variant="thesis"`) with `section_height` (then
-      required) and `deflection`, at slip `slip`.
+    - `van_es`: Van Es (2.26) with D_r = `cover.hard_surface_coefficient` W, D_d = 0,
+      rho_0 = `cover.density`, h_0 = `cover.depth`, lambda = `cover.grain_index`,
+      sigma_i = `cover.ice_pressure`, and the final density from mass conservation in
+      the rut of the rigid wheel: rho_f = min(rho_0 h_0 / (h_0 - z0), rho_i), z0 the
+      rigid-wheel sinkage.  The default sigma_i = 421 kPa makes Van Es's compaction law
+      reach 500 kg/m^3 at 210 kPa — CRREL's final-density rule for tyres with peak
+      contact pressure up to 210 kPa (Richmond 1995, CRREL Report 95-7).  It is an
+      assumption, not a thesis value.
+    - `brixius` (only when `brixius` is given — the thesis gives no cone index for its
+      snow): mu_R W from eq. (2.20) (`variant="thesis"`) with the `BrixiusTyre`'s cone
+      index, section height and deflection, at slip `slip`.
 
     Defaults: the thesis tyre (`RigidWheel.thesis_tire()`: D 0.736 m, b 0.235 m), the
     thesis's fresh snow (`WongSnow.thesis_fresh_snow()`, and its Bekker fit
@@ -80,14 +117,14 @@ def compare_motion_resistance(
     **Arguments:**
 
     - `loads`: wheel loads [N] (default 15 loads from 1 to 8 kN).
-    - `wheel`: `snowjax.RigidWheel`; `wong_snow`: `snowjax.WongSnow`;
-      `bekker_snow`: `snowjax.BekkerSoil`.
-    - `density`: rho_0 [kg/m^3]; `snow_depth`: h_0 [m] (default z_w of `wong_snow`).
+    - `wheel`: `snowjax.RigidWheel`; `wong_snow`: `snowjax.WongSnow`, or a
+      `ContactModel` of one (e.g. another shear law); `bekker_snow`:
+      `snowjax.BekkerSoil`.
     - `slip`: slip of the rigid wheel [-] (default 0, a towed wheel).
-    - `ice_pressure`: sigma_i of Van Es [Pa]; `grain_index`: lambda [-].
-    - `hard_surface_coefficient`: f_r of Van Es's D_r [-].
-    - `cone_index` [Pa], `section_height` [m], `deflection` [m]: Brixius's inputs.
-    - `shear`: shear model passed to `snowjax.solve_wheel`.
+    - `cover`: `SnowCover(density [kg/m^3], depth [m], ice_pressure [Pa], grain_index
+      [-], hard_surface_coefficient [-])`, the snow cover of the empirical models.
+    - `brixius`: `BrixiusTyre(cone_index [Pa], section_height [m], deflection [m])` for
+      the Brixius column, or None (default: no Brixius column).
 
     **Returns:** `(table, figure)`: `table` is a dict of NumPy arrays keyed `"load"` [N]
     and one key per model [N] (NaN where the rigid-wheel solve neither converged nor
@@ -112,7 +149,8 @@ def compare_motion_resistance(
     diameter = float(wheel.diameter)
     radius = diameter / 2
     width = float(wheel.width)
-    h0 = float(wong_snow.z_w) if snow_depth is None else float(snow_depth)
+    density = cover.density
+    h0 = float(_unpack_model(wong_snow)[0].z_w) if cover.depth is None else float(cover.depth)
     _positive("snow_depth", h0, "m")
 
     table: dict[str, np.ndarray] = {"load": loads}
@@ -123,7 +161,7 @@ def compare_motion_resistance(
 
     solve_wheel = _find_solve_wheel()
     if solve_wheel is not None:
-        state = solve_wheel(wheel, wong_snow, jnp.asarray(loads), jnp.asarray(slip), shear=shear)
+        state = solve_wheel(wheel, wong_snow, jnp.asarray(loads), jnp.asarray(slip))
         status = np.asarray(state.status)
         # converged (0) or resting on the base (1, sinkage = z_w): usable; anything else
         # (invalid, not converged, entry-angle limit) is reported as NaN, never plotted.
@@ -156,17 +194,16 @@ def compare_motion_resistance(
         h0,
         density,
         rho_f,
-        ice_pressure,
-        hard_surface_coefficient,
-        grain_index=grain_index,
+        cover.ice_pressure,
+        cover.hard_surface_coefficient,
+        grain_index=cover.grain_index,
     )
     table["final_density"] = np.where(known, rho_f, np.nan)
     table["van_es"] = np.where(known, np.asarray(van_es), np.nan)
 
-    if cone_index is not None:
-        if section_height is None:
-            raise ValueError("`section_height` [m] is required with `cone_index` (Brixius).")
-        mu_r = brixius(cone_index, width, diameter, loads, deflection, section_height, slip)
+    if brixius is not None:
+        cone, deflection, height = brixius.cone_index, brixius.deflection, brixius.section_height
+        mu_r = _brixius(cone, width, diameter, loads, deflection, height, slip)
         table["brixius"] = np.asarray(mu_r.motion_resistance) * loads
 
     # where each model is inside the range its source states (open markers otherwise)

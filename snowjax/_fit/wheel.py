@@ -16,7 +16,8 @@ tire/snow interaction*, MSc thesis, University of Alaska Fairbanks.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 import equinox as eqx
 import jax
@@ -33,13 +34,13 @@ from .._leaves import (
 )
 from .._terrain.base import Terrain, _terrain_parameter_infos
 from .._terrain.wong import WongSnow
-from .._wheel.distribution import AbstractStressDistribution, FrontRegion
+from .._wheel.distribution import FrontRegion
 from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel, _unpack_model
+from .._wheel.model import ContactModel, _takes_model, _unpack_model
 from .._wheel.shear_law import AbstractShearLaw, _shear_law
 from .core import (
     FitResult,
@@ -230,6 +231,48 @@ def _unit(infos, target) -> str:
 # ---------------------------------------------------------------------------------------
 # Checks of the data and the start values
 # ---------------------------------------------------------------------------------------
+
+
+def _start_models(wheel, snow, distribution, lateral, start, dtype):
+    """(wheel, terrain, distribution, lateral law) at the start values, in `dtype`."""
+    wheel_a = _rebuild(wheel, start["wheel"], dtype)
+    if isinstance(snow, WongSnow):
+        snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
+    else:
+        snow_a = _rebuild(snow, start["terrain"], dtype)
+    dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
+    lateral_a = None if lateral is None else _rebuild(lateral, start["lateral"], dtype)
+    return wheel_a, snow_a, dist_a, lateral_a
+
+
+def _valid_points(status, n_quantities: int, n_names: int) -> np.ndarray:
+    """The points with an equilibrium at the end of the fit (converged or bottomed out);
+    `ValueError` if they leave fewer valid values than fitted parameters."""
+    m = len(status)
+    good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
+    n_valid = int(good.sum()) * n_quantities
+    if n_valid < n_names:
+        raise ValueError(
+            f"fit_wheel: the fit failed: {m - int(good.sum())} of {m} data points have no "
+            f"equilibrium at the end of the fit ({_status_summary(status)}), which leaves "
+            f"{n_valid} valid value(s) for {n_names} fitted parameter(s); check the start "
+            "values and the data"
+        )
+    return good
+
+
+def _measured_quantities(measured) -> dict[str, Any]:
+    """`fit_wheel`'s `measured` mapping, every quantity present (None where not
+    measured); a `ValueError` names an unknown key."""
+    if not isinstance(measured, Mapping):
+        raise TypeError(
+            'measured must be a mapping of quantity to values, e.g. {"sinkage": z}; got '
+            f"{type(measured).__name__}"
+        )
+    unknown = [key for key in measured if key not in WHEEL_QUANTITIES]
+    if unknown:
+        raise ValueError(f"measured has unknown quantities {unknown}; known: {WHEEL_QUANTITIES}")
+    return {q: measured.get(q) for q in WHEEL_QUANTITIES}
 
 
 def _wheel_data(load, slip, measured, scale, slip_angle=None):
@@ -487,25 +530,22 @@ def _fitted(models, start, targets, theta, dtype):
     return fitted_snow, fitted_dist, fitted_lateral, _rebuild(wheel, final["wheel"], dtype)
 
 
+@_takes_model(
+    positional=5,
+    **{q: f'measured={{"{q}": ...}}' for q in WHEEL_QUANTITIES},
+)
 def fit_wheel(
     wheel: AbstractWheel,
     snow: Terrain | ContactModel,
     load: Float[ArrayLike, " m"],
     slip: Float[ArrayLike, " m"],
+    measured: Mapping[str, Float[ArrayLike, " m"]],
     *,
-    sinkage: Float[ArrayLike, " m"] | None = None,
-    drawbar_pull: Float[ArrayLike, " m"] | None = None,
-    motion_resistance: Float[ArrayLike, " m"] | None = None,
     fit: Sequence[str] = ("p_w", "z_w", "tan_phi"),
-    shear: str | AbstractShearLaw = "classic",
-    scale: dict[str, float] | None = None,
-    max_steps: int = 100,
-    nodes_per_panel: int | None = None,
-    solve_max_steps: int = 64,
-    distribution: AbstractStressDistribution | None = None,
+    scale: Mapping[str, Float[ArrayLike, "..."]] | None = None,
     slip_angle: Float[ArrayLike, " m"] | None = None,
-    lateral: Lateral | None = None,
-    lateral_force: Float[ArrayLike, " m"] | None = None,
+    max_steps: int = 100,
+    solve_max_steps: int = 64,
 ) -> FitResult:
     """Fit terrain (and stress-distribution) parameters to wheel measurements through
     the equilibrium (4.14).
@@ -513,8 +553,8 @@ def fit_wheel(
     For each data point (load F_z, slip i) the model is `snowjax.solve_wheel`: the entry
     angle with W(θ0) = F_z (4.14), then sinkage (4.15), motion resistance (4.16) and
     drawbar pull (2.10), on any terrain (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-    `LayeredSnow`) with the front-region stresses (`distribution=None`) or Wong & Reece's
-    distribution.  All points are solved in one vmapped call per residual evaluation,
+    `LayeredSnow`) with the front-region stresses or Wong & Reece's distribution (the
+    `ContactModel`'s).  All points are solved in one vmapped call per residual evaluation,
     and `optimistix.least_squares` (Levenberg–Marquardt) differentiates straight through
     that root find with the implicit function theorem.
 
@@ -576,33 +616,33 @@ def fit_wheel(
     - `snow`: the terrain, any `snowjax.Terrain` with scalar leaves (SI units: Pa, m,
       N/m^(n+1), N/m^(n+2), N/m^3; see each class): start values of the fitted
       parameters and fixed values of the rest.  Every value must be valid for
-      `solve_wheel`.  Or a `ContactModel` (its shear law, distribution, lateral law and
-      nodes; then leave those keywords out).
+      `solve_wheel`.  Or a `ContactModel` (scalar leaves) with:
+      - `shear`: any shear law (as `solve_wheel`; `ThesisSimplified()` only for
+        `WongSnow` without a distribution);
+      - `distribution`: `None` (the thesis's front-region stresses) or a
+        `snowjax.WongReece` (c1, c2, c3 [-]) whose leaves can be fitted too;
+      - `lateral`: a `snowjax.Lateral` (default `Lateral()` when a `slip_angle` is
+        given); its leaves are fitted as `lateral.shear_modulus` (give it a value to
+        fit it) and `lateral.unit_weight`; `bulldozing` is held;
+      - `nodes_per_panel` and `terms` (force terms of your own, held at their values),
+        as in `solve_wheel`.
     - `load`: F_z [N] (> 0), one per data point (several loads allowed).
     - `slip`: driving slip i [-] in [-1, 1], same length.
-    - `sinkage` [m], `drawbar_pull` [N], `motion_resistance` [N]: measured values, same
-      length; at least one of them.
+    - `measured`: the measured values by quantity, a mapping with at least one of
+      `"sinkage"` [m], `"drawbar_pull"` [N], `"motion_resistance"` [N] and
+      `"lateral_force"` [N] (F_y; needs `slip_angle`), each one value per point.
     - `fit`: names of the parameters to fit (see above; a non-empty subset of
       `fit_parameter_names(snow, distribution)`).
-    - `shear`: a shear law or its name, `"classic"`, `"simplified"` or `"none"` (as `solve_wheel`;
-      `"simplified"` only for `WongSnow` without a distribution).
-    - `scale`: optional residual scale per quantity [m or N] (scalar or per point), see
-      above.
-    - `max_steps`: Levenberg–Marquardt step limit (an integer >= 1); `nodes_per_panel`,
-      `solve_max_steps`: passed to `solve_wheel` (its quadrature nodes and Newton
-      iteration limit).
-    - `distribution`: `None` (the thesis's front-region stresses) or a
-      `snowjax.WongReece` (c1, c2, c3 [-], scalar leaves) whose leaves can be fitted too.
+    - `scale`: optional residual scale per quantity [m or N] (scalar or per point),
+      keyed like `measured`; see above.
     - `slip_angle`: slip angle beta [rad] of every point (|beta| < pi/2), or None
-      (straight running); with it the model is `solve_wheel(..., slip_angle=beta,
-      lateral=lateral)`.
-    - `lateral`: a `snowjax.Lateral` (scalar leaves; default `Lateral()` when a
-      `slip_angle` is given); its leaves are fitted as `lateral.shear_modulus` (give it
-      a value to fit it) and `lateral.unit_weight`; `bulldozing` is held.
-    - `lateral_force`: measured lateral force F_y [N] per point (needs `slip_angle`).
+      (straight running); with it the model is `solve_wheel(..., slip_angle=beta)`.
+    - `max_steps`: Levenberg–Marquardt step limit (an integer >= 1); `solve_max_steps`:
+      `solve_wheel`'s Newton iteration limit.
 
     **Returns:** a `FitResult`; `info` has `snow` and `terrain` (the fitted terrain, of
-    the type of `snow`), `distribution` (the fitted distribution or `None`),
+    the type of `snow`'s), `distribution` (the fitted distribution or `None`),
+    `lateral`, `wheel`, `model` (the fitted `ContactModel`, to pass to `solve_wheel`),
     `transforms` (name -> `"log"` / `"linear"`), `predictions` (dict of model values at
     the optimum), `status`, `scale`.
 
@@ -616,17 +656,14 @@ def fit_wheel(
     compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
     a second.
     """
-    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
-        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
-    )
+    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(snow)
     shear = _shear_law(shear)
     distribution, lateral = _checked_types(wheel, snow, distribution, lateral, slip_angle, shear)
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
     shear_model = shear
 
-    measured = {"sinkage": sinkage, "drawbar_pull": drawbar_pull,
-                "motion_resistance": motion_resistance, "lateral_force": lateral_force}  # fmt: skip
+    measured = _measured_quantities(measured)
     ld, sl, m, quantities, data, scales, sa = _wheel_data(load, slip, measured, scale, slip_angle)
     m_total = m * len(quantities)
     if m_total <= len(names):
@@ -638,13 +675,7 @@ def fit_wheel(
     _check_solvable(wheel, snow, distribution, ld, sl, shear_model)
 
     dtype = jnp.result_type(float)
-    wheel_a = _rebuild(wheel, start["wheel"], dtype)
-    if isinstance(snow, WongSnow):
-        snow_a = WongSnow(**{k: jnp.asarray(v, dtype) for k, v in start["terrain"].items()})
-    else:
-        snow_a = _rebuild(snow, start["terrain"], dtype)
-    dist_a = None if distribution is None else _rebuild(distribution, start["distribution"], dtype)
-    lateral_a = None if lateral is None else _rebuild(lateral, start["lateral"], dtype)
+    models = _start_models(wheel, snow, distribution, lateral, start, dtype)
     theta0 = np.array([start[o][p] for o, p in targets])
     infos = _infos(
         {"terrain": snow, "distribution": distribution, "lateral": lateral, "wheel": wheel}
@@ -663,7 +694,6 @@ def fit_wheel(
     ])  # fmt: skip
     arrays = [jnp.asarray(x, dtype) for x in (ld, sl, data, scales)]
     angles = None if sa is None else jnp.asarray(sa, dtype)
-    models = (wheel_a, snow_a, dist_a, lateral_a)
     args = (*models, *arrays[:2], angles, *arrays[2:], transform.cast(dtype), terms)
     try:
         sol = least_squares(residual, jnp.asarray(u0, dtype), args, max_steps=max_steps, tol=1e-10)
@@ -673,15 +703,7 @@ def fit_wheel(
     pred, status = sol.aux
 
     status = np.asarray(status).astype(int)
-    good = (status == Status.CONVERGED) | (status == Status.BOTTOMED_OUT)
-    n_valid = int(good.sum()) * len(quantities)
-    if n_valid < len(names):
-        raise ValueError(
-            f"fit_wheel: the fit failed: {m - int(good.sum())} of {m} data points have no "
-            f"equilibrium at the end of the fit ({_status_summary(status)}), which leaves "
-            f"{n_valid} valid value(s) for {len(names)} fitted parameter(s); check the start "
-            "values and the data"
-        )
+    good = _valid_points(status, len(quantities), len(names))
     rows = np.tile(good, len(quantities))
     r_used = np.where(rows, sol.residual, 0.0)
     theta = transform.values(sol.u)
@@ -706,6 +728,9 @@ def fit_wheel(
             "distribution": fitted_dist,
             "lateral": fitted_lateral,
             "wheel": fitted_wheel,
+            "model": ContactModel(
+                fitted_snow, fitted_dist, shear, fitted_lateral, nodes_per_panel, terms
+            ),
             "transforms": {nm: "log" if log else "linear" for nm, log in zip(names, transform.log)},
             "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},
             "status": status,

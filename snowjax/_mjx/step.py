@@ -11,21 +11,18 @@ import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
-from .._sim.planar import _frame_forces, _steered_model
+from .._sim.planar import _steered_model
 from .._sim.vehicle import (
     DEFAULT_SPEED_EPS,
     _check_concrete,
     _check_dynamic_shear,
     _check_parameters,
+    _frame_forces,
 )
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel
-from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import Status, _check_model
-from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel
+from .._wheel.model import ContactModel, _takes_model
 from .._wheel.passes import Ruts, _follower_overlap, _levels, _resolved
-from .._wheel.shear_law import AbstractShearLaw
 from .wheels import MjxWheels, _ground, mjx
 
 __all__ = ["MjxWheelForces", "Rollout", "step", "rollout"]
@@ -101,7 +98,7 @@ def _rut_overlap(d, wheels, follows, velocity, spin, axle):
     )
 
 
-def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ruts):
+def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
     """(world wrenches (n, 6), damping blocks D (n, 4, 3), frame rows (n, 4, 3) and
     (n, 3, 3), MjxWheelForces) of the snow on every wheel at MJX's current state."""
     dtype = d.qpos.dtype
@@ -119,13 +116,13 @@ def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ruts):
     airborne = jnp.clip(load / min_load, 0.0, 1.0)  # lift-off: forces fade to 0
     solve_load = jnp.maximum(load, min_load)
     n = wheels.num_wheels
-    follows = (-1,) * n if ruts is None else ruts.follows
-    overlap = None if ruts is None else _rut_overlap(d, wheels, follows, velocity, spin, axle)
+    follows = ground.layout(n)
+    overlap = ground._overlap(lambda f: _rut_overlap(d, wheels, f, velocity, spin, axle))
 
     def forces(u):
         f = _frame_forces(
             wheels.wheel, contact, solve_load, u[0], u[1], u[2], speed_eps, entry_angle,
-            _WHEEL_MAX_STEPS, ruts, overlap,
+            _WHEEL_MAX_STEPS, ground, overlap,
         )  # fmt: skip
         out = (f.drawbar_pull, f.lateral_force, -f.resisting_torque, f.aligning_torque)
         return jnp.stack(out), f
@@ -211,15 +208,14 @@ def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
         raise ValueError("wheels do not belong to this model (body or sensor out of range)")
 
 
-def _contact_model(snow, shear, distribution, lateral):
-    """The `ContactModel` of `step`'s arguments, checked (shear, lateral law)."""
-    snow, shear, distribution, lateral, nodes, terms = _steered_model(
-        snow, shear, distribution, lateral, None, "snowjax.mjx"
-    )
+def _contact_model(snow):
+    """The `ContactModel` of `step`'s terrain or model, checked (shear, lateral law)."""
+    snow, shear, distribution, lateral, nodes, terms = _steered_model(snow, "snowjax.mjx")
     model = ContactModel(snow, distribution, shear, lateral, nodes, terms)
     return snow, shear, distribution, model
 
 
+@_takes_model(positional=5)
 def step(
     m: mjx.Model,
     d: mjx.Data,
@@ -228,10 +224,7 @@ def step(
     entry_angle: Float[ArrayLike, " n"] | None = None,
     *,
     load: Float[ArrayLike, " n"] | str | None = None,
-    shear: ShearModel | AbstractShearLaw = "classic",
-    lateral: Lateral | None = None,
     speed_eps: float = DEFAULT_SPEED_EPS,
-    distribution: AbstractStressDistribution | None = None,
     ruts: Ruts | None = None,
 ) -> tuple[mjx.Data, MjxWheelForces]:
     """One MJX time step with the snow's forces on the wheels; pure and differentiable.
@@ -251,18 +244,17 @@ def step(
     - `m`, `d`: `mjx.Model` (Euler integrator) and `mjx.Data`.
     - `wheels`: `MjxWheels` of this model.
     - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
-      `LayeredSnow`; SI), or a `ContactModel` (its shear law, distribution and lateral
-      law; then leave those keywords out).  Vmapping over its leaves runs one rollout
-      per terrain.
+      `LayeredSnow`; SI), or a `ContactModel`: its shear law, lateral law, stress
+      distribution, nodes per panel and force terms as in `snowjax.simulate_planar`.
+      Vmapping over its leaves runs one rollout per terrain.
     - `entry_angle`: warm start theta0 [rad] per wheel, the `entry_angle` output of the
       previous step (None: cold start); changes only the iteration count.
     - `load`: vertical load per wheel [N]: None (default) `wheels.static_load`, the
       quasi-static load at rest; an array (shape () or (n,)) to prescribe it; or
       `"contact"`: the ground's normal force on the wheel in the previous step (includes
       load transfer and lift-off).
-    - `shear`, `lateral`, `speed_eps`, `distribution`: as in `snowjax.simulate_planar`
-      (shear model; `Lateral` law, default `Lateral()`; regularisation speed [m/s];
-      stress distribution).
+    - `speed_eps`: regularisation speed at rest [m/s], > 0 (see
+      `snowjax.planar_wheel_kinematics`).
     - `ruts`: None (default: every wheel on virgin snow), or `snowjax.Ruts(k_0, a_u,
       follows)`: the wheels run in the ruts of the wheels ahead, `follows` in
       `MjxWheels` order (default: the last half behind the first half, as the shipped
@@ -280,7 +272,7 @@ def step(
     `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
     `Status.INVALID_INPUT`.
     """
-    snow, shear, distribution, contact = _contact_model(snow, shear, distribution, lateral)
+    snow, shear, distribution, contact = _contact_model(snow)
     _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
@@ -291,14 +283,14 @@ def step(
     n = wheels.num_wheels
     if entry_angle is not None:
         entry_angle = jnp.broadcast_to(jnp.asarray(entry_angle, d.qpos.dtype), (n,))
-    ruts = _resolved(ruts, n)
+    ground = _resolved(ruts, n)
 
     d = mjx.fwd_position(m, d)
     d = mjx.sensor_pos(m, d)
     d = mjx.fwd_velocity(m, d)
     d = mjx.sensor_vel(m, d)
     wrench, damp, rows, out = _snow_forces(
-        m, d, wheels, contact, entry_angle, load, float(speed_eps), ruts
+        m, d, wheels, contact, entry_angle, load, float(speed_eps), ground
     )
     b = np.asarray(wheels.body_ids)
     d = d.replace(xfrc_applied=d.xfrc_applied.at[b].set(wrench.astype(d.xfrc_applied.dtype)))
@@ -334,6 +326,7 @@ class Rollout(eqx.Module):
     data: mjx.Data
 
 
+@_takes_model(positional=6)
 def rollout(
     m: mjx.Model,
     d: mjx.Data,
@@ -344,10 +337,7 @@ def rollout(
     *,
     entry_angle: Float[ArrayLike, " n"] | None = None,
     load: Float[ArrayLike, " n"] | str | None = None,
-    shear: ShearModel | AbstractShearLaw = "classic",
-    lateral: Lateral | None = None,
     speed_eps: float = DEFAULT_SPEED_EPS,
-    distribution: AbstractStressDistribution | None = None,
     ruts: Ruts | None = None,
 ) -> Rollout:
     """`num_steps` calls of `step` in one `jax.lax.scan`, the entry angles carried along.
@@ -361,7 +351,7 @@ def rollout(
 
     **Returns:** `Rollout`.
     """
-    _, shear_name, _, contact = _contact_model(snow, shear, distribution, lateral)
+    _, shear_name, _, contact = _contact_model(snow)
     _check_step_args(m, d, wheels, contact.terrain, shear_name, speed_eps, contact.distribution)
     num_steps = int(num_steps)
     if num_steps < 1:

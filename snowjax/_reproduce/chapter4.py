@@ -17,6 +17,7 @@ from .._terrain.wong import WongSnow
 from .._wheel import derivatives as dv
 from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import RigidWheel
+from .._wheel.model import ContactModel
 from .output import md_table, write_csv
 from .plotting import status_names, subplots
 from .spec import Context, FigureResult, figure, table
@@ -303,7 +304,7 @@ def _wheel_sweep(ctx: Context):
     slips = np.linspace(0.0, 1.0, ctx.n_wheel_slips)
     res = {}
     for shear in WHEEL_SHEAR_MODELS:
-        st = solve_wheel(wheel, snow, loads[:, None], slips[None, :], shear)
+        st = solve_wheel(wheel, ContactModel(snow, shear=shear), loads[:, None], slips[None, :])
         res[shear] = {
             f: np.asarray(getattr(st, f))
             for f in (

@@ -16,6 +16,7 @@ from .._terrain.wong import WongSnow
 from .._wheel.distribution import WongReece
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import RigidWheel
+from .._wheel.model import ContactModel
 from .plotting import status_names, subplots
 from .spec import Context, FigureResult, figure
 
@@ -51,7 +52,7 @@ def fig_terrains(ctx: Context) -> FigureResult:
     rows, statuses, summary = [], set(), {}
     for (name, terrain), color in zip(terrains.items(), ("C0", "C1", "C2")):
         for (dname, dist), style in zip(dists.items(), ("-", "--")):
-            st = solve_wheel(wheel, terrain, TERRAIN_LOAD, slips, distribution=dist)
+            st = solve_wheel(wheel, ContactModel(terrain, dist), TERRAIN_LOAD, slips)
             z = 100 * np.asarray(st.sinkage)
             dp = np.asarray(st.drawbar_pull)
             statuses |= set(int(s) for s in np.asarray(st.status))

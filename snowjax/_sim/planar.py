@@ -78,19 +78,24 @@ from typing import Any
 
 import diffrax
 import equinox as eqx
-import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _as_float, _check_real_leaves, _is_traced
-from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.lateral import Lateral
 from .._wheel.model import _unpack_model
-from .._wheel.passes import _follower_overlap, _in_tracks
+from .._wheel.passes import _follower_overlap
 from .._wheel.shear_law import _shear_law
-from .vehicle import DEFAULT_SPEED_EPS, STANDARD_GRAVITY, _check_increasing, _kinematics
+from .vehicle import (
+    DEFAULT_SPEED_EPS,
+    MAX_MODEL_SLIP_ANGLE,
+    STANDARD_GRAVITY,
+    _check_increasing,
+    _frame_forces,
+    _planar_kinematics,
+)
 
 __all__ = [
     "MAX_MODEL_SLIP_ANGLE",
@@ -101,7 +106,6 @@ __all__ = [
 ]
 
 NUM_WHEELS = 4  # front left, front right, rear left, rear right
-MAX_MODEL_SLIP_ANGLE = float(np.deg2rad(85.0))  # [rad] the clip of the slip angle
 
 
 # ---------------------------------------------------------------------------------------
@@ -224,24 +228,19 @@ class SteeringProfile(eqx.Module):
         return jnp.interp(t, self.times, self.values)
 
 
-def _steered_model(snow, shear, distribution, lateral, nodes_per_panel, who):
+def _steered_model(snow, who):
     """(terrain, shear law, distribution, lateral law, nodes per panel, terms) of a steered
-    wheel's arguments (`simulate_planar`, `snowjax.mjx`): a `ContactModel` unpacked, the
-    shear law checked to have a lateral counterpart, the lateral law defaulted to
-    `Lateral()` and checked.  `who` names the caller in the errors."""
-    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
-        snow, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
-    )
+    wheel's terrain or `ContactModel` (`simulate_planar`, `snowjax.mjx`): the shear law
+    checked to have a lateral counterpart, the lateral law defaulted to `Lateral()`.
+    `who` names the caller in the errors."""
+    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(snow)
     law = _shear_law(shear)
     if not law.lateral:
         raise ValueError(
             f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
-            f"shear='classic' (or 'none') with {who}."
+            f"ContactModel(terrain, shear='classic') (or 'none') with {who}."
         )
-    if lateral is None:
-        lateral = Lateral()
-    elif not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
+    lateral = Lateral() if lateral is None else lateral
     return snow, law, distribution, lateral, nodes_per_panel, terms
 
 
@@ -279,24 +278,6 @@ def _steering_at(steering, t, y):
 # ---------------------------------------------------------------------------------------
 # Wheel kinematics and forces
 # ---------------------------------------------------------------------------------------
-
-
-def _planar_kinematics(vx, vy, omega, radius, speed_eps):
-    """(slip, slip angle, direction, longitudinal factor, lateral factor, compaction
-    direction) of the module docs."""
-    slip, direction, scale_x, compaction = _kinematics(vx, omega, radius, speed_eps)
-    floor = speed_eps * float(np.finfo(vx.dtype).eps)
-    along, side = jnp.abs(vx), -direction * vy
-    moving = along + jnp.abs(side) > floor
-    beta = jnp.arctan2(jnp.where(moving, side, 0.0), jnp.where(moving, along, 1.0))
-    beta = jnp.clip(beta, -MAX_MODEL_SLIP_ANGLE, MAX_MODEL_SLIP_ANGLE)
-    rim_mean, side_speed = (vx + omega * radius) / 2, vy
-    q2 = rim_mean * rim_mean + side_speed * side_speed
-    sliding = q2 > floor * floor
-    q = jnp.where(sliding, jnp.sqrt(jnp.where(sliding, q2, 1.0)), 0.0)
-    gap = 1 - jnp.minimum(q / speed_eps, 1.0)
-    scale_y = 1 - gap * gap
-    return slip, beta, direction, scale_x, scale_y, compaction
 
 
 def planar_wheel_kinematics(
@@ -337,20 +318,6 @@ def planar_wheel_kinematics(
     return slip, beta, scale_x, scale_y
 
 
-class _PlanarForces(eqx.Module):
-    """Wheel forces in the wheel frames (regularised) and the solve's outputs, (..., 4)."""
-
-    drawbar_pull: Array  # along the heading [N]
-    lateral_force: Array  # along the axle [N]
-    resisting_torque: Array  # about the axle [N m]
-    aligning_torque: Array  # about the vertical [N m]
-    sinkage: Array
-    entry_angle: Array
-    slip: Array
-    slip_angle: Array
-    status: Array
-
-
 def _body_to_wheel(vehicle, u, v, r, steer):
     """Wheel-frame velocities (v_x, v_y) [m/s] of the wheel centres, (..., 4) each."""
     pos = vehicle.wheel_positions
@@ -371,61 +338,16 @@ def _rut_overlap(vehicle, u, v, r, follows):
     return _follower_overlap(pos, velocity, r[..., None], vehicle.wheel.width, follows)
 
 
-def _planar_wheel_forces(
-    vehicle, contact, u, v, r, omega, steer, speed_eps, guess, steps, ruts=None
-):
+def _planar_wheel_forces(vehicle, contact, u, v, r, omega, steer, speed_eps, guess, steps, ground):
     """Snow forces on the four wheels at body velocities (u, v, r) and spins omega, for a
-    `ContactModel` `contact`; with `ruts` (`Ruts`, layout resolved) the rear wheels run
-    in the front wheels' ruts (`_rut_overlap`)."""
+    `ContactModel` `contact` on `ground` (`_resolved(ruts, 4)`: with `Ruts` the rear
+    wheels run in the front wheels' ruts, `_rut_overlap`)."""
     vx, vy = _body_to_wheel(vehicle, u, v, r, steer)
-    overlap = None if ruts is None else _rut_overlap(vehicle, u, v, r, ruts.follows)
+    overlap = ground._overlap(lambda follows: _rut_overlap(vehicle, u, v, r, follows))
     return _frame_forces(
         vehicle.wheel, contact, vehicle.wheel_load, vx, vy, omega, speed_eps, guess, steps,
-        ruts, overlap,
+        ground, overlap,
     )  # fmt: skip
-
-
-def _frame_forces(wheel, contact, load, vx, vy, omega, speed_eps, guess, steps, ruts, overlap):
-    """Snow forces on wheels in their own frames (heading, axle, vertical) from the wheel
-    centres' velocities (v_x along the heading, v_y along the axle [m/s]) and spins omega
-    [rad/s], shapes (..., n): `simulate_planar`'s and `snowjax.mjx`'s force function.
-    `wheel`'s leaves are scalar or of shape (n,); `load` (n,) [N]; with `ruts` (layout
-    resolved) the followers run in their leaders' ruts, seeing `overlap` (..., n) of them."""
-    radius = wheel.diameter / 2
-    kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
-    slip, beta, direction, scale_x, scale_y, compaction = kinematics
-
-    def solve(c, idx=slice(None)):
-        part = jax.tree.map(lambda x: x[idx] if jnp.ndim(x) == 1 else x, wheel)
-        st = solve_wheel(
-            part,
-            c,
-            load[idx],
-            slip[..., idx],
-            slip_angle=beta[..., idx],
-            max_steps=steps,
-            initial_entry_angle=None if guess is None else guess[..., idx],
-        )
-        return st, st.sinkage
-
-    if ruts is None:
-        st, _ = solve(contact)
-    else:
-        st = _in_tracks(ruts, ruts.follows, contact, wheel.width, overlap, solve)
-    # The mirror image of a wheel travelling backwards is turned by 180 degrees about the
-    # vertical: forces along the heading and the axle change sign, the moment about the
-    # vertical does not.
-    return _PlanarForces(
-        drawbar_pull=direction * scale_x * (st.thrust - compaction * st.motion_resistance),
-        lateral_force=direction * scale_y * st.lateral_force,
-        resisting_torque=direction * scale_x * st.torque,
-        aligning_torque=scale_y * st.aligning_torque,
-        sinkage=st.sinkage,
-        entry_angle=st.entry_angle,
-        slip=slip * jnp.ones_like(st.sinkage),
-        slip_angle=beta * jnp.ones_like(st.sinkage),
-        status=st.status,
-    )
 
 
 def _body_forces(vehicle, f, steer):

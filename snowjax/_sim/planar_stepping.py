@@ -15,7 +15,6 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any, ClassVar, cast
 
-import diffrax
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -24,12 +23,9 @@ from jaxtyping import ArrayLike, Float
 
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel
-from .._wheel.distribution import AbstractStressDistribution
-from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel
-from .._wheel.passes import Ruts, _resolved
-from .._wheel.shear_law import AbstractShearLaw
+from .._wheel.model import ContactModel, _takes_model
+from .._wheel.passes import Ruts, _resolved, _VirginGround
+from .options import InitialState, Stepping
 from .planar import (
     NUM_WHEELS,
     PlanarTrajectory,
@@ -41,8 +37,8 @@ from .planar import (
     _steered_model,
     _steering_at,
 )
-from .stepping import _check_run, _integrate, _WarmStartTerm
-from .vehicle import DEFAULT_SPEED_EPS, TorqueProfile, _check_concrete, _check_profile, _torque_at
+from .stepping import _MOVED_TO_OPTIONS, _check_run, _integrate, _WarmStartTerm
+from .vehicle import TorqueProfile, _check_concrete, _check_profile, _torque_at
 
 __all__ = ["simulate_planar"]
 
@@ -56,7 +52,7 @@ class _PlanarTerm(_WarmStartTerm):
     torque: Any
     speed_eps: float = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    ruts: Ruts | None = None
+    ground: Ruts | _VirginGround  # the terrain state the wheels run on (`_resolved`)
     OUTPUTS: ClassVar = (
         "drawbar_pull",
         "lateral_force",
@@ -86,7 +82,7 @@ class _PlanarTerm(_WarmStartTerm):
             self.speed_eps,
             hint,
             self.max_wheel_steps,
-            self.ruts,
+            self.ground,
         )
         return steer, f
 
@@ -190,6 +186,7 @@ def _check_steering(steering) -> None:
         _check_concrete("steering", steering, lambda x: np.abs(x) < np.pi / 2, "in (-pi/2, pi/2)")
 
 
+@_takes_model(positional=6, **_MOVED_TO_OPTIONS)
 def simulate_planar(
     vehicle: PlanarVehicle,
     snow: Terrain | ContactModel,
@@ -198,19 +195,9 @@ def simulate_planar(
     t1: float,
     dt: float,
     *,
-    initial_speed: Float[ArrayLike, ""] = 0.0,
-    initial_yaw_rate: Float[ArrayLike, ""] = 0.0,
-    initial_wheel_speed: Float[ArrayLike, "..."] | None = None,
-    shear: ShearModel | AbstractShearLaw = "classic",
-    lateral: Lateral | None = None,
-    speed_eps: float = DEFAULT_SPEED_EPS,
-    save_every: int = 1,
-    adjoint: diffrax.AbstractAdjoint | None = None,
-    nodes_per_panel: int | None = None,
-    newton_steps: int = 100,
-    wheel_max_steps: int = 5,
-    distribution: AbstractStressDistribution | None = None,
+    initial: InitialState = InitialState(),
     ruts: Ruts | None = None,
+    stepping: Stepping = Stepping(),
 ) -> PlanarTrajectory:
     """Simulate a four-wheel vehicle that steers on snow, in the plane; differentiable.
 
@@ -225,10 +212,12 @@ def simulate_planar(
     Time stepping, accuracy and gradients are those of [`snowjax.simulate_longitudinal`][]
     (implicit Euler steps of `dt` in `diffrax.diffeqsolve`, damped Newton per step, warm
     start of the wheel equilibria, failed steps retried smaller): gradients w.r.t. every
-    array leaf of `vehicle`, `snow`, `steering`, `torque`, `lateral` and `distribution`
-    are exact derivatives of the discrete trajectory; `jax.grad` uses `adjoint` (default
-    `diffrax.RecursiveCheckpointAdjoint()`), forward mode (`jax.jvp`, `jax.jacfwd`) needs
-    `adjoint=diffrax.ForwardMode()` and is much cheaper for a few parameters.  Works
+    array leaf of `vehicle`, `snow` (the model's lateral law, distribution and terms
+    too), `steering` and `torque` are exact derivatives of the discrete trajectory;
+    `jax.grad` uses `stepping.adjoint` (default `diffrax.RecursiveCheckpointAdjoint()`),
+    forward mode (`jax.jvp`, `jax.jacfwd`) needs
+    `stepping=Stepping(adjoint=diffrax.ForwardMode())` and is much cheaper for a few
+    parameters.  Works
     under `jax.vmap` (over terrains, profiles, vehicles).  The entry point is jitted
     (`eqx.filter_jit`): new array values reuse the compiled program; new shapes, `t1`,
     `dt`, static options or a new Python callable compile anew.
@@ -244,8 +233,10 @@ def simulate_planar(
     - `vehicle`: `PlanarVehicle` (mass [kg], yaw inertia [kg m^2], wheel inertia
       [kg m^2], wheel, wheelbase [m], track width [m], CG position [m], Ackermann flag).
     - `snow`: the terrain, any `snowjax.Terrain` (SI parameter sets; scalar leaves), or a
-      `ContactModel` (its shear law, distribution, lateral law and nodes; then leave
-      those keywords out).
+      `ContactModel` (scalar leaves): its lateral law (`Lateral(K_y [m], unit weight
+      [N/m^3], bulldozing)`, default `Lateral()`, K_y = the terrain's K), stress
+      distribution, nodes per panel and force terms; its shear law `JanosiHanamoto()`
+      or `NoShear()` (`ThesisSimplified()` has no lateral counterpart and is refused).
     - `steering`: steering input delta [rad], |delta| < pi/2, counter-clockwise positive
       (delta > 0 turns left): a number (constant), a `SteeringProfile` (piecewise linear
       in t) or a callable `steering(t, y) -> ()` of the time [s] and the state vector
@@ -256,39 +247,21 @@ def simulate_planar(
       (k, 4), or a callable `torque(t, speed, wheel_speed) -> () or (4,)` with speed the
       forward speed u [m/s] and wheel_speed the spins (4,) [rad/s].
     - `t1`: final time [s]; `dt`: time step [s] (`round(t1 / dt)` steps; both static).
-    - `initial_speed`: u(0) [m/s] (default 0: start from rest); the lateral speed starts
-      at 0.
-    - `initial_yaw_rate`: r(0) [rad/s].
-    - `initial_wheel_speed`: omega(0) [rad/s], scalar or (4,); default
-      `initial_speed / r_w` (free rolling on a straight path).
-    - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` has
-      no lateral counterpart and is refused).
-    - `lateral`: `Lateral` (lateral shear modulus K_y [m], unit weight [N/m^3],
-      bulldozing), passed to `solve_wheel`; default `Lateral()` (K_y = the terrain's K).
-    - `speed_eps`: regularisation speed at rest [m/s] (see
-      `snowjax.planar_wheel_kinematics`).
-    - `save_every`: save every k-th step.
-    - `adjoint`: a `diffrax.AbstractAdjoint`.
-    - `nodes_per_panel`: quadrature nodes per panel of `solve_wheel` (default: its own).
-    - `newton_steps`: iteration limit of each implicit step's Newton solve.
-    - `wheel_max_steps`: Newton iteration limit of each wheel equilibrium (`solve_wheel`'s
-      `max_steps`).  The default 5 is `solve_wheel`'s batch-wide first phase only:
-      warm-started, the equilibria converge in one to three steps, and cold (the initial
-      state, the first step) within five on the snows checked (the thesis's fresh and
-      plate-rule snows and `BekkerSoil.snow_us`, 1-8 kN, slips -1 to 1, slip angles up to
-      85 degrees); without the straggler phase the program compiles in about 70 % of the
-      time.  An equilibrium not converged within the limit shows as
-      `Status.NOT_CONVERGED` in `status`; raise the limit then.
-    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
-      (scalar leaves).
+    - `initial`: `InitialState(speed [m/s], wheel_speed [rad/s], yaw_rate [rad/s])`:
+      u(0), omega(0) (a number or (4,); default `speed / r_w`, free rolling on a
+      straight path) and r(0); default at rest.  The lateral speed starts at 0.
     - `ruts`: None (default: every wheel on virgin snow, as before), or `Ruts(k_0,
       a_u)`: the rear wheels run in the front wheels' ruts, each seeing the rut's depth
       times its overlap with the front wheel's path (`Ruts`, `track_offset`: a turning
       vehicle's rear wheels leave the front ruts gradually).  A rear wheel's `sinkage`
       is then measured below the floor of its rut.
+    - `stepping`: `Stepping(save_every, adjoint, newton_steps, wheel_max_steps,
+      speed_eps)` (see `Stepping`): here `wheel_max_steps` defaults to 5, the wheel
+      solver's batch-wide first phase (warm-started equilibria converge in one to three
+      steps; about 70 % of the compile time); raise it if `status` shows
+      `Status.NOT_CONVERGED`.
 
-    **Returns:** `PlanarTrajectory` with `1 + round(t1 / dt) // save_every` rows.
+    **Returns:** `PlanarTrajectory` with `1 + round(t1 / dt) // stepping.save_every` rows.
 
     **Cost.**  With a slip angle `solve_wheel` uses its any-terrain quadrature: measured
     3.9 ms per step (four wheels, float64, a 1.5 m/s turn in steps of 0.05 s, on the
@@ -311,32 +284,24 @@ def simulate_planar(
     (no exception) and the remaining rows hold inf states.
     """
     snow, shear, distribution, lateral, nodes_per_panel, terms = _steered_model(
-        snow, shear, distribution, lateral, nodes_per_panel, "simulate_planar"
+        snow, "simulate_planar"
     )
     if not isinstance(vehicle, PlanarVehicle):
         raise TypeError(f"vehicle must be a PlanarVehicle, got {type(vehicle).__name__}")
-    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)
-    if int(wheel_max_steps) < 1:
-        raise ValueError(f"wheel_max_steps must be a positive integer; got {wheel_max_steps!r}")
+    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, initial, stepping)
     _check_vehicle(vehicle)
     _check_steering(steering)
-    for name, value in (
-        ("initial_speed", initial_speed),
-        ("initial_yaw_rate", initial_yaw_rate),
-        ("initial_wheel_speed", initial_wheel_speed),
-    ):
-        _check_concrete(name, value, _any, "a number")
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, NUM_WHEELS)
     leaves = jax.tree_util.tree_leaves((vehicle, snow, distribution, lateral))
     dtype = jnp.result_type(*leaves, float)
-    speed0 = jnp.asarray(initial_speed, dtype)
-    if initial_wheel_speed is None:
-        initial_wheel_speed = speed0 / (vehicle.wheel.diameter / 2)
-    if np.shape(initial_wheel_speed) not in ((), (NUM_WHEELS,)):
+    speed0 = jnp.asarray(initial.speed, dtype)
+    wheel_speed0 = initial.wheel_speed
+    if wheel_speed0 is None:
+        wheel_speed0 = speed0 / (vehicle.wheel.diameter / 2)
+    if np.shape(wheel_speed0) not in ((), (NUM_WHEELS,)):
         raise ValueError(
-            "initial_wheel_speed must be a scalar or of shape (4,); "
-            f"got {np.shape(initial_wheel_speed)}"
+            f"initial.wheel_speed must be a scalar or of shape (4,); got {np.shape(wheel_speed0)}"
         )
     zero = jnp.zeros(1, dtype)
     y0 = jnp.concatenate(
@@ -346,8 +311,8 @@ def simulate_planar(
             zero,
             speed0.reshape(1),
             zero,
-            jnp.asarray(initial_yaw_rate, dtype).reshape(1),
-            jnp.broadcast_to(jnp.asarray(initial_wheel_speed, dtype), (NUM_WHEELS,)),
+            jnp.asarray(initial.yaw_rate, dtype).reshape(1),
+            jnp.broadcast_to(jnp.asarray(wheel_speed0, dtype), (NUM_WHEELS,)),
         ]
     )
     if not callable(torque):
@@ -359,7 +324,7 @@ def simulate_planar(
         torque = jnp.asarray(torque, dtype)
     if not callable(steering):
         steering = jnp.asarray(steering, dtype)
-    ruts = _resolved(ruts, NUM_WHEELS)
+    ground = _resolved(ruts, NUM_WHEELS)
     term = _PlanarTerm(
         vehicle=vehicle,
         contact=ContactModel(
@@ -367,12 +332,10 @@ def simulate_planar(
         ),
         steering=steering,
         torque=torque,
-        speed_eps=float(speed_eps),
-        max_wheel_steps=int(wheel_max_steps),
-        ruts=ruts,
+        speed_eps=stepping.speed_eps,
+        max_wheel_steps=5 if stepping.wheel_max_steps is None else stepping.wheel_max_steps,
+        ground=ground,
     )
-    if adjoint is None:
-        adjoint = diffrax.RecursiveCheckpointAdjoint()
     return _simulate_planar_jit(
-        term, y0, n_steps, float(dt), int(save_every), adjoint, int(newton_steps)
+        term, y0, n_steps, float(dt), stepping.save_every, stepping.adjoint, stepping.newton_steps
     )

@@ -53,17 +53,16 @@ import numpy as np
 import optimistix as optx
 from jaxtyping import ArrayLike, Float
 
+from .._leaves import _is_traced
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel
-from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model
-from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.passes import Ruts, _resolved
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.passes import Ruts, _resolved, _VirginGround
+from .._wheel.shear_law import _shear_law
 from .._wheel.status import Status
 from .levenberg_marquardt import _LevenbergMarquardt, _PassiveBlockSolver
+from .options import InitialState, Stepping
 from .vehicle import (
-    DEFAULT_SPEED_EPS,
     TorqueProfile,
     Trajectory,
     Vehicle,
@@ -122,7 +121,7 @@ class _VehicleTerm(_WarmStartTerm):
     torque: Any
     speed_eps: float = eqx.field(static=True)
     max_wheel_steps: int = eqx.field(static=True)
-    ruts: Ruts | None = None
+    ground: Ruts | _VirginGround  # the terrain state the wheels run on (`_resolved`)
     OUTPUTS: ClassVar = ("longitudinal_force", "resisting_torque", "sinkage", "entry_angle", "slip")
 
     def forces(self, y, hint):
@@ -136,7 +135,7 @@ class _VehicleTerm(_WarmStartTerm):
             self.speed_eps,
             hint,
             self.max_wheel_steps,
-            self.ruts,
+            self.ground,
         )
 
     def vf(self, t, y, args):
@@ -307,8 +306,15 @@ def _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
     return save_ts, ys, term.unpack(outputs), status, sol.result
 
 
-def _check_run(wheel, snow, distribution, shear, t1, dt, speed_eps, save_every) -> int:
+def _check_run(wheel, snow, distribution, shear, t1, dt, initial, stepping) -> int:
     """Checks shared by the simulations' entry points; returns the number of steps."""
+    if not isinstance(initial, InitialState):
+        raise TypeError(f"initial must be a snowjax.InitialState, got {type(initial).__name__}")
+    if not isinstance(stepping, Stepping):
+        raise TypeError(f"stepping must be a snowjax.Stepping, got {type(stepping).__name__}")
+    for name in ("speed", "wheel_speed", "yaw_rate"):
+        value = getattr(initial, name)
+        _check_concrete(f"initial.{name}", value, lambda x: np.ones_like(x, bool), "a number")
     _check_dynamic_shear(shear, "the simulations")
     if not isinstance(snow, Terrain):
         raise TypeError(
@@ -317,15 +323,25 @@ def _check_run(wheel, snow, distribution, shear, t1, dt, speed_eps, save_every) 
         )
     _check_model(wheel, snow, distribution, shear)
     _check_parameters(wheel, snow, distribution, shear)
-    for name, value in (("t1", t1), ("dt", dt), ("speed_eps", speed_eps)):
+    for name, value in (("t1", t1), ("dt", dt)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be finite and > 0; got {value!r}")
     n_steps = int(round(t1 / dt))
     if n_steps < 1:
         raise ValueError(f"t1 / dt must be >= 1 step; got t1={t1!r}, dt={dt!r}")
-    if int(save_every) < 1:
-        raise ValueError(f"save_every must be a positive integer; got {save_every!r}")
     return n_steps
+
+
+# The keywords the simulations grouped into `InitialState` and `Stepping`.
+_MOVED_TO_OPTIONS = {
+    "initial_speed": "initial=InitialState(speed=...)",
+    "initial_wheel_speed": "initial=InitialState(wheel_speed=...)",
+    "initial_yaw_rate": "initial=InitialState(yaw_rate=...)",
+    **{
+        name: f"stepping=Stepping({name}=...)"
+        for name in ("speed_eps", "save_every", "adjoint", "newton_steps", "wheel_max_steps")
+    },
+}
 
 
 @eqx.filter_jit
@@ -350,6 +366,7 @@ def _simulate_jit(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
     )
 
 
+@_takes_model(positional=5, **_MOVED_TO_OPTIONS)
 def simulate_longitudinal(
     vehicle: Vehicle,
     snow: Terrain | ContactModel,
@@ -357,16 +374,9 @@ def simulate_longitudinal(
     t1: float,
     dt: float,
     *,
-    initial_speed: Float[ArrayLike, ""] = 0.0,
-    initial_wheel_speed: Float[ArrayLike, "..."] | None = None,
-    shear: ShearModel | AbstractShearLaw = "classic",
-    speed_eps: float = DEFAULT_SPEED_EPS,
-    save_every: int = 1,
-    adjoint: diffrax.AbstractAdjoint | None = None,
-    nodes_per_panel: int | None = None,
-    newton_steps: int = 100,
-    distribution: AbstractStressDistribution | None = None,
+    initial: InitialState = InitialState(),
     ruts: Ruts | None = None,
+    stepping: Stepping = Stepping(),
 ) -> Trajectory:
     """Simulate a vehicle driving straight on snow; differentiable end to end.
 
@@ -377,11 +387,12 @@ def simulate_longitudinal(
     each solved by a damped Newton (Levenberg–Marquardt) iteration; a step whose implicit
     equation is not solved (rare: the first steps from rest) is retried as smaller steps
     by the step-size controller, so the saved times are always the grid `k dt`.
-    Gradients w.r.t. every array leaf of `vehicle`, `snow`, `distribution` and `torque`
-    (and the initial state) are exact derivatives of the discrete trajectory: `jax.grad`
-    uses `adjoint` (default `diffrax.RecursiveCheckpointAdjoint()`); for
-    `jax.jvp`/`jax.jacfwd` pass `adjoint=diffrax.ForwardMode()`, which compiles and runs
-    much faster for a few parameters.  The entry point is jitted (`eqx.filter_jit`):
+    Gradients w.r.t. every array leaf of `vehicle`, `snow` (the model's distribution and
+    terms too) and `torque` (and the initial state) are exact derivatives of the discrete
+    trajectory: `jax.grad` uses `stepping.adjoint` (default
+    `diffrax.RecursiveCheckpointAdjoint()`); for `jax.jvp`/`jax.jacfwd` pass
+    `stepping=Stepping(adjoint=diffrax.ForwardMode())`, which compiles and runs much
+    faster for a few parameters.  The entry point is jitted (`eqx.filter_jit`):
     calls with new array values reuse the compiled program; new shapes, `t1`, `dt`,
     static options or a new Python callable as `torque` compile anew.
 
@@ -389,34 +400,29 @@ def simulate_longitudinal(
 
     - `vehicle`: `Vehicle` (mass [kg], wheel inertia [kg m^2], wheel, number of wheels).
     - `snow`: the terrain, any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`,
-      `ReeceSoil`, `LayeredSnow`; SI); scalar leaves.  Or a `ContactModel` (its shear
-      law, distribution and nodes; then leave those keywords out).
+      `ReeceSoil`, `LayeredSnow`; SI); scalar leaves.  Or a `ContactModel` (its stress
+      distribution, nodes per panel and force terms, scalar leaves; its shear law
+      `JanosiHanamoto()` or `NoShear()`: `ThesisSimplified()` is refused, its braking
+      extension can push a braked wheel forward).
     - `torque`: applied torque per wheel T [N m], positive driving forwards: a number
       or an array of shape (n,) (constant), a `TorqueProfile` (piecewise linear in t),
       or a callable `torque(t, speed, wheel_speed) -> () or (n,)` (a controller; make it
       an `eqx.Module` so that its parameters are traced and differentiable).
     - `t1`: final time [s]; `dt`: time step [s] (`round(t1 / dt)` steps; both static:
       each new value compiles anew).
-    - `initial_speed`: v(0) [m/s] (default 0: start from rest).
-    - `initial_wheel_speed`: omega(0) [rad/s], scalar or (n,); default
-      `initial_speed / r` (free rolling, slip 0).
-    - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
-      refused: its braking extension can push a braked wheel forward).
-    - `speed_eps`: regularisation speed at rest [m/s] (see `wheel_kinematics`).
-    - `save_every`: save every k-th step.
-    - `adjoint`: a `diffrax.AbstractAdjoint`.
-    - `nodes_per_panel`: quadrature nodes per panel of `solve_wheel` (default: its own).
-    - `newton_steps`: iteration limit of each implicit step's Newton solve; a step not
-      solved within it is retried as smaller steps.
-    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
-      (scalar leaves), passed to `solve_wheel`.
+    - `initial`: `InitialState(speed [m/s], wheel_speed [rad/s], yaw_rate=0)`, the
+      state at t = 0 (default: at rest; `wheel_speed` a number or (n,), default
+      `speed / r`, free rolling).
     - `ruts`: None (default: every wheel on virgin snow, as before), or `Ruts(k_0,
       a_u, follows)`: the wheels run in the ruts of the wheels ahead (by default the
       last half behind the first half; `multi_pass`'s model at every instant).  A
       following wheel's `sinkage` is then measured below the floor of its rut.
+    - `stepping`: `Stepping(save_every, adjoint, newton_steps, wheel_max_steps,
+      speed_eps)`, how the run steps and what it saves (default: every step saved,
+      `RecursiveCheckpointAdjoint`, 100 Newton steps per implicit step, 64 per wheel
+      equilibrium, `speed_eps` 0.05 m/s).
 
-    **Returns:** `Trajectory` with `1 + round(t1 / dt) // save_every` rows.
+    **Returns:** `Trajectory` with `1 + round(t1 / dt) // stepping.save_every` rows.
 
     **Accuracy.**  First order in `dt`: on the thesis tyre and snow the speed of a
     0.05 s (0.1 s) step run is within 0.35 % (0.7 %) of a 0.004 s run over 8 s of
@@ -441,49 +447,49 @@ def simulate_longitudinal(
     differentiated they make lineax raise on the non-finite values inside the implicit
     solves, so optimise positive parameters through their logarithms.
     """
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
-        snow, shear, distribution, nodes_per_panel=nodes_per_panel
-    )
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(snow)
     shear = _shear_law(shear)
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
-    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, speed_eps, save_every)
+    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, initial, stepping)
     _check_concrete("vehicle.mass", vehicle.mass, lambda x: x > 0, "> 0 kg")
     _check_concrete("vehicle.wheel_inertia", vehicle.wheel_inertia, lambda x: x > 0, "> 0 kg m^2")
-    _check_concrete("initial_speed", initial_speed, lambda x: np.ones_like(x, bool), "[m/s]")
-    _check_concrete(
-        "initial_wheel_speed", initial_wheel_speed, lambda x: np.ones_like(x, bool), "[rad/s]"
-    )
+    if not (_is_traced(initial.yaw_rate) or np.all(np.asarray(initial.yaw_rate) == 0)):
+        raise ValueError(
+            f"simulate_longitudinal drives straight: initial.yaw_rate must be 0, got "
+            f"{initial.yaw_rate!r} (simulate_planar steers)"
+        )
     n = vehicle.num_wheels
     if not (isinstance(n, int) and n >= 1):
         raise ValueError(f"vehicle.num_wheels must be a positive int; got {n!r}")
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, n)
     dtype = jnp.result_type(vehicle.mass, *jax.tree_util.tree_leaves((snow, distribution)), float)
-    speed0 = jnp.asarray(initial_speed, dtype)
-    if initial_wheel_speed is None:
-        initial_wheel_speed = speed0 / (vehicle.wheel.diameter / 2)
+    speed0 = jnp.asarray(initial.speed, dtype)
+    wheel_speed0 = initial.wheel_speed
+    if wheel_speed0 is None:
+        wheel_speed0 = speed0 / (vehicle.wheel.diameter / 2)
     y0 = jnp.concatenate(
         [
             speed0.reshape(1),
             jnp.zeros(1, dtype),
-            jnp.broadcast_to(jnp.asarray(initial_wheel_speed, dtype), (n,)),
+            jnp.broadcast_to(jnp.asarray(wheel_speed0, dtype), (n,)),
         ]
     )
     if not callable(torque):
         _check_concrete("torque", torque, lambda x: np.ones_like(x, bool), "[N m]")
         torque = jnp.asarray(torque, dtype)
-    ruts = _resolved(ruts, n)
+    ground = _resolved(ruts, n)
     term = _VehicleTerm(
         vehicle=vehicle,
         contact=ContactModel(
             cast(Terrain, snow), distribution, shear, None, nodes_per_panel, terms
         ),
         torque=torque,
-        speed_eps=float(speed_eps),
-        max_wheel_steps=64,
-        ruts=ruts,
+        speed_eps=stepping.speed_eps,
+        max_wheel_steps=64 if stepping.wheel_max_steps is None else stepping.wheel_max_steps,
+        ground=ground,
     )
-    if adjoint is None:
-        adjoint = diffrax.RecursiveCheckpointAdjoint()
-    return _simulate_jit(term, y0, n_steps, float(dt), int(save_every), adjoint, int(newton_steps))
+    return _simulate_jit(
+        term, y0, n_steps, float(dt), stepping.save_every, stepping.adjoint, stepping.newton_steps
+    )

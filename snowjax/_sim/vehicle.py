@@ -88,14 +88,12 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._terrain.base import Terrain
-from .._wheel.contact import ShearModel
-from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _validate_eagerly
-from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.passes import _in_tracks
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.passes import _VirginGround
+from .._wheel.shear_law import _shear_law
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -110,6 +108,7 @@ __all__ = [
 
 STANDARD_GRAVITY = 9.80665  # [m/s^2]
 DEFAULT_SPEED_EPS = 0.05  # [m/s]
+MAX_MODEL_SLIP_ANGLE = float(np.deg2rad(85.0))  # [rad] the clip of the slip angle
 
 
 # ---------------------------------------------------------------------------------------
@@ -212,34 +211,102 @@ class WheelForces(eqx.Module):
     status: Int[Array, "..."]
 
 
-def _wheel_forces(speed, wheel_speed, load, wheel, contact, speed_eps, guess, steps, ruts=None):
-    """`WheelForces` for a `ContactModel` `contact` (checked inputs; `wheel_forces`);
-    with `ruts` (`Ruts`, its layout resolved), the wheels along the last axis run in
-    the ruts of the wheels ahead (straight ahead: full overlap)."""
-    slip, direction, scale, compaction = _kinematics(
-        speed, wheel_speed, wheel.diameter / 2, speed_eps
-    )
-    if ruts is None:
-        st = solve_wheel(wheel, contact, load, slip, max_steps=steps, initial_entry_angle=guess)
+def _planar_kinematics(vx, vy, omega, radius, speed_eps):
+    """(slip, slip angle, direction, longitudinal factor, lateral factor, compaction
+    direction) of `snowjax/_sim/planar.py`'s module docs."""
+    slip, direction, scale_x, compaction = _kinematics(vx, omega, radius, speed_eps)
+    floor = speed_eps * float(np.finfo(vx.dtype).eps)
+    along, side = jnp.abs(vx), -direction * vy
+    moving = along + jnp.abs(side) > floor
+    beta = jnp.arctan2(jnp.where(moving, side, 0.0), jnp.where(moving, along, 1.0))
+    beta = jnp.clip(beta, -MAX_MODEL_SLIP_ANGLE, MAX_MODEL_SLIP_ANGLE)
+    rim_mean, side_speed = (vx + omega * radius) / 2, vy
+    q2 = rim_mean * rim_mean + side_speed * side_speed
+    sliding = q2 > floor * floor
+    q = jnp.where(sliding, jnp.sqrt(jnp.where(sliding, q2, 1.0)), 0.0)
+    gap = 1 - jnp.minimum(q / speed_eps, 1.0)
+    scale_y = 1 - gap * gap
+    return slip, beta, direction, scale_x, scale_y, compaction
+
+
+class _FrameForces(eqx.Module):
+    """Wheel forces in the wheel frames (regularised) and the solve's outputs."""
+
+    drawbar_pull: Array  # along the heading [N]
+    lateral_force: Array  # along the axle [N]
+    resisting_torque: Array  # about the axle [N m]
+    aligning_torque: Array  # about the vertical [N m]
+    sinkage: Array
+    entry_angle: Array
+    slip: Array
+    slip_angle: Array
+    status: Array
+
+
+def _frame_forces(wheel, contact, load, vx, vy, omega, speed_eps, guess, steps, ground, overlap):
+    """Snow forces on wheels in their own frames (heading, axle, vertical) from the wheel
+    centres' velocities and spins: the one force function of `wheel_forces`, both
+    simulations and `snowjax.mjx`.
+
+    `vx` along the heading, `vy` along the axle [m/s] (None: the wheels run straight,
+    without a slip angle: `solve_wheel`'s straight-running rules and no lateral force),
+    `omega` the spins [rad/s]; `load` [N]; `guess` the warm start (or None); `steps`
+    `solve_wheel`'s `max_steps`.  The wheels run on `ground` (`passes._VirginGround`, or
+    `Ruts` with its layout resolved: the wheel axis last, a follower seeing `overlap`
+    (..., n) of its leader's rut)."""
+    radius = wheel.diameter / 2
+    if vy is None:  # straight running: no slip angle, no lateral force
+        slip, direction, scale_x, compaction = _kinematics(vx, omega, radius, speed_eps)
+        beta, scale_y = None, jnp.zeros_like(scale_x)
     else:
-        n = len(ruts.follows)
-        slips = jnp.broadcast_to(slip, (*slip.shape[:-1], n))
+        kinematics = _planar_kinematics(vx, vy, omega, radius, speed_eps)
+        slip, beta, direction, scale_x, scale_y, compaction = kinematics
 
-        def solve(c, idx):
-            hint = None if guess is None else jnp.broadcast_to(guess, (n,))[idx]
-            st = solve_wheel(
-                wheel, c, load, slips[..., idx], max_steps=steps, initial_entry_angle=hint
-            )
-            return st, st.sinkage
+    def solve(c, take):
+        part = jax.tree.map(lambda x: take(x) if jnp.ndim(x) == 1 else x, wheel)
+        st = solve_wheel(
+            part,
+            c,
+            take(load),
+            take(slip),
+            slip_angle=None if beta is None else take(beta),
+            max_steps=steps,
+            initial_entry_angle=None if guess is None else take(guess),
+        )
+        return st, st.sinkage
 
-        st = _in_tracks(ruts, ruts.follows, contact, wheel.width, jnp.ones_like(slips), solve)
-    return WheelForces(
-        longitudinal_force=direction * scale * (st.thrust - compaction * st.motion_resistance),
-        resisting_torque=direction * scale * st.torque,
+    st = ground._solve(contact, wheel.width, overlap, solve)
+    # The mirror image of a wheel travelling backwards is turned by 180 degrees about the
+    # vertical: forces along the heading and the axle change sign, the moment about the
+    # vertical does not.
+    return _FrameForces(
+        drawbar_pull=direction * scale_x * (st.thrust - compaction * st.motion_resistance),
+        lateral_force=direction * scale_y * st.lateral_force,
+        resisting_torque=direction * scale_x * st.torque,
+        aligning_torque=scale_y * st.aligning_torque,
         sinkage=st.sinkage,
         entry_angle=st.entry_angle,
         slip=slip * jnp.ones_like(st.sinkage),
+        slip_angle=(0.0 if beta is None else beta) * jnp.ones_like(st.sinkage),
         status=st.status,
+    )
+
+
+def _wheel_forces(speed, wheel_speed, load, wheel, contact, speed_eps, guess, steps, ground):
+    """`WheelForces` of wheels running straight (`wheel_forces`, `simulate_longitudinal`;
+    `_frame_forces` without a lateral speed) on `ground` (`_resolved(ruts, n)`: with
+    `Ruts`, the wheels along the last axis run in the ruts of the wheels ahead, straight
+    ahead: full overlap)."""
+    f = _frame_forces(
+        wheel, contact, load, speed, None, wheel_speed, speed_eps, guess, steps, ground, 1.0
+    )
+    return WheelForces(
+        longitudinal_force=f.drawbar_pull,
+        resisting_torque=f.resisting_torque,
+        sinkage=f.sinkage,
+        entry_angle=f.entry_angle,
+        slip=f.slip,
+        status=f.status,
     )
 
 
@@ -278,19 +345,17 @@ def _check_concrete(name, value, ok, allowed):
         raise ValueError(f"{name} must be finite and {allowed}; got {value!r}")
 
 
+@_takes_model(positional=5)
 def wheel_forces(
     speed: Float[ArrayLike, "..."],
     wheel_speed: Float[ArrayLike, "..."],
     load: Float[ArrayLike, "..."],
     wheel: AbstractWheel,
     snow: Terrain | ContactModel,
-    shear: ShearModel | AbstractShearLaw = "classic",
     *,
     speed_eps: float = DEFAULT_SPEED_EPS,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
-    nodes_per_panel: int | None = None,
     max_steps: int = 64,
-    distribution: AbstractStressDistribution | None = None,
 ) -> WheelForces:
     """Snow forces on a rigid wheel from its kinematic state: the force function to call
     inside any simulator step (MJX, Brax, your own integrator).
@@ -315,17 +380,14 @@ def wheel_forces(
     - `load`: vertical load F_z on the wheel [N], > 0.
     - `wheel`, `snow`: `RigidWheel` (D, b [m]) or `DeflectingTire`, and the terrain,
       any `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`, `LayeredSnow`; SI
-      parameter sets), or a `ContactModel` in place of the terrain (then leave `shear`,
-      `distribution` and `nodes_per_panel` out).
-    - `shear`: shear model of `solve_wheel`, `"classic"` or `"none"` (`"simplified"` is
-      refused: its braking extension can push a braked wheel forward).
+      parameter sets), or a `ContactModel` in place of the terrain: its stress
+      distribution, nodes per panel and force terms as in `solve_wheel`, its shear law
+      `JanosiHanamoto()` (default) or `NoShear()` (`ThesisSimplified()` is refused: its
+      braking extension can push a braked wheel forward).
     - `speed_eps`: regularisation speed [m/s], > 0.
     - `initial_entry_angle`: warm start theta0 [rad] for `solve_wheel`, e.g. the
       `entry_angle` of the previous simulator step; changes only the iteration count.
-    - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
-    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`,
-      passed to `solve_wheel`.
+    - `max_steps`: Newton iteration limit, passed to `solve_wheel`.
 
     **Returns:** `WheelForces` (longitudinal force [N], resisting torque [N m], sinkage
     [m], entry angle [rad], slip [-], status).
@@ -347,9 +409,7 @@ def wheel_forces(
     range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
-        snow, shear, distribution, nodes_per_panel=nodes_per_panel
-    )
+    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(snow)
     shear = _shear_law(shear)
     _check_dynamic_shear(shear, "wheel_forces")
     _check_model(wheel, snow, distribution, shear)
@@ -369,6 +429,7 @@ def wheel_forces(
         float(speed_eps),
         initial_entry_angle,
         int(max_steps),
+        _VirginGround(),
     )
 
 

@@ -68,10 +68,9 @@ import numpy as np
 from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
-from .._wheel.distribution import AbstractStressDistribution
 from .._wheel.geometry import AbstractWheel
-from .._wheel.model import ContactModel, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.shear_law import _shear_law
 from .definition import (
     _FORMATS,
     _OUR_FILES,
@@ -211,7 +210,7 @@ def _worker(args_path: str, x64: bool) -> None:
     sweep(*job.pop("args"), **job)
 
 
-def _start_workers(args, kwargs, count, cores):
+def _start_workers(args, kwargs, chunk_size, count, cores):
     """Start workers 1..count-1 (the caller is worker 0); returns [(process, log, job)]."""
     import pickle
     import subprocess
@@ -225,11 +224,8 @@ def _start_workers(args, kwargs, count, cores):
         job = dict(
             kwargs,
             args=args,
-            process_index=index,
-            process_count=count,
-            workers=1,
+            run=SweepRun(chunk_size, process_index=index, process_count=count, workers=1),
             progress=False,
-            resume=True,
             formats=(),
             core=cores[index] if len(cores) >= count else None,
         )
@@ -308,7 +304,7 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
         except (ValueError, KeyError, TypeError) as err:
             raise ValueError(
                 f"sweep: {manifest_path} is not a snowjax sweep manifest ({err}); use another"
-                " directory or resume=False to start over"
+                " directory or run=SweepRun(resume=False) to start over"
             ) from None
         if old_digest != digest:
             old = manifest.get("definition", {})
@@ -323,40 +319,77 @@ def _prepare_dir(out: pathlib.Path, d: _Definition, digest: str, resume: bool, t
             )
             raise ValueError(
                 f"sweep: {out} holds a different sweep ({why}). Use another directory, or"
-                " resume=False (`--restart` on the command line) to discard it."
+                " run=SweepRun(resume=False) (`--restart` on the command line) to discard it."
             )
         return manifest
     if any(p.name.startswith("chunk_") for p in out.iterdir()):
         raise ValueError(
             f"sweep: {out} has chunk files but no {MANIFEST}, so they cannot be checked"
-            " against this sweep; use another directory or resume=False to discard them"
+            " against this sweep; use another directory or run=SweepRun(resume=False) to"
+            " discard them"
         )
     manifest = {"definition_hash": digest, "definition": d.summary(), "outputs": {}}
     _write_json(manifest_path, manifest, tag)
     return manifest
 
 
+@dataclasses.dataclass(frozen=True)
+class SweepRun:
+    """How a sweep is cut into chunks and who computes them (`run=` of `sweep`).
+
+    - `chunk_size`: rows per chunk C (rounded up to a multiple of the device count for
+      the solve; the padding is discarded).  Memory grows with C, not with the number
+      of points; C is part of the sweep definition.  Default 8192.
+    - `resume`: `True` (default) resumes a sweep in `out` with the same definition (and
+      refuses a different one); `False` deletes the sweep files in `out` and starts over.
+    - `devices`: devices to shard each chunk over (default `jax.local_devices()`).
+    - `process_index`, `process_count`: this process and the number of processes
+      (default `jax.process_index()`, `jax.process_count()`, i.e. after
+      `jax.distributed.initialize()`).  Chunk k is computed by process
+      `k % process_count`; the process that finds every chunk on disk when it
+      finishes writes the consolidated outputs.
+    - `callback`: called as `callback(k, path)` after chunk k is safely on disk.
+    - `workers`: processes that share the chunks on this machine (chunk k by worker
+      `k % workers`), each pinned to its own CPU core; this process is worker 0 and
+      writes the outputs once all are done.  Default `None`: one per available core
+      when the sweep runs on the CPU, has at least `AUTO_WORKERS_POINTS` (10^6) points
+      and none of `devices`, `process_index`, `process_count` and `callback` is given;
+      else 1.  `workers > 1` excludes those four.  The arguments are pickled to the
+      workers, so a terrain, distribution, shear law or force term class of your own
+      must be importable.
+    """
+
+    chunk_size: int = 8192
+    resume: bool = True
+    devices: Sequence[Any] | None = None
+    process_index: int | None = None
+    process_count: int | None = None
+    callback: Callable[[int, pathlib.Path], None] | None = None
+    workers: int | None = None
+
+
+_MOVED_TO_RUN = {
+    name: f"run=SweepRun({name}=...)"
+    for name in (
+        "chunk_size", "resume", "devices", "process_index", "process_count", "callback",
+        "workers",
+    )
+}  # fmt: skip
+
+
+@_takes_model(positional=4, **_MOVED_TO_RUN)
 def sweep(
     wheel: AbstractWheel | Sequence[AbstractWheel],
     snow: Terrain | ContactModel | Sequence[Terrain],
     loads: Float[ArrayLike, " loads"],
     slips: Float[ArrayLike, " slips"],
     *,
-    shear: str | AbstractShearLaw = "classic",
-    distribution: AbstractStressDistribution | Sequence[AbstractStressDistribution] | None = None,
     out: str | os.PathLike = "snowjax-sweep",
-    chunk_size: int = 8192,
     grid: bool = True,
-    progress: bool = True,
-    resume: bool = True,
     formats: Sequence[str] = ("npz", "csv"),
-    nodes_per_panel: int | None = None,
+    progress: bool = True,
     max_steps: int = 64,
-    devices: Sequence[Any] | None = None,
-    process_index: int | None = None,
-    process_count: int | None = None,
-    callback: Callable[[int, pathlib.Path], None] | None = None,
-    workers: int | None = None,
+    run: SweepRun = SweepRun(),
 ) -> SweepResult:
     """Sweep the wheel equilibrium (4.14) over loads x slips x parameter sets, to disk.
 
@@ -373,49 +406,30 @@ def sweep(
       `inflation_pressure`, ...).
     - `snow`: the terrain: a `snowjax.Terrain` (`WongSnow`, `BekkerSoil`, `ReeceSoil`,
       `LayeredSnow`; SI leaves, see their docs), a list of terrains of one type, or a
-      `ContactModel` (its shear law, distribution and nodes; then leave those out);
-      leaves scalar or 1-D like `wheel`.  In grid mode every leaf that varies (of
-      wheel, terrain and distribution together) must have the same length P: parameter
-      set p takes element p of each of them (zipped).
+      `ContactModel` (its shear law, stress distribution, nodes per panel and force
+      terms, as in `solve_wheel`; `"simplified"` shear needs a `WongSnow` and no
+      distribution); leaves scalar or 1-D like `wheel`.  In grid mode every leaf that
+      varies (of wheel, terrain and distribution together) must have the same length
+      P: parameter set p takes element p of each of them (zipped).  The terrain's and
+      the distribution's types and leaf names are part of the sweep definition: a sweep
+      of another terrain or distribution in `out` is refused.
     - `loads`: wheel loads F_z [N], > 0 (scalar or 1-D).
     - `slips`: driving slips i [-] in [-1, 1] (scalar or 1-D).
-    - `shear`: a shear law or its name, `"classic"`, `"simplified"` or `"none"` (see `solve_wheel`;
-      `"simplified"` needs a `WongSnow` and no distribution).
-    - `distribution`: `None` or `FrontRegion()` (the thesis's front-region stresses), a
-      `WongReece` (c1, c2, c3 [-]) or another `AbstractStressDistribution`
-      (scalar or 1-D leaves, or a list of them), as in `solve_wheel`.
-      The terrain's and the distribution's types and leaf names are part of the sweep
-      definition: a sweep of another terrain or distribution in `out` is refused.
     - `out`: directory for `manifest.json`, the chunks and the outputs.
-    - `chunk_size`: rows per chunk C (rounded up to a multiple of the device count for
-      the solve; the padding is discarded).  Memory grows with C, not with the number of
-      points; C is part of the sweep definition.
     - `grid`: `True` for the Cartesian product P x loads x slips, flat index
       `(p * n_loads + l) * n_slips + s`; `False` for a list: loads, slips and the
       varying leaves are zipped (equal lengths, or length 1).  List inputs are read by
       slices, so `np.memmap` arrays work for inputs too large for RAM.
-    - `progress`: show a `rich` progress bar (chunks, points/s).
-    - `resume`: `True` resumes a sweep in `out` with the same definition (and refuses a
-      different one); `False` deletes the sweep files in `out` and starts over.
     - `formats`: consolidated outputs to write once every chunk is done: `"npz"`
       (`sweep.npz`, one array per column) and/or `"csv"` (`sweep.csv`); `()` keeps only
       the chunk directory (the best choice for 1e8 points; read it with
       `iter_sweep_chunks`).
-    - `nodes_per_panel`, `max_steps`: passed to `solve_wheel`.
-    - `devices`: devices to shard each chunk over (default `jax.local_devices()`).
-    - `process_index`, `process_count`: this process and the number of processes
-      (default `jax.process_index()`, `jax.process_count()`, i.e. after
-      `jax.distributed.initialize()`).  Chunk k is computed by process
-      `k % process_count`; the process that finds every chunk on disk when it
-      finishes writes the consolidated outputs.
-    - `callback`: called as `callback(k, path)` after chunk k is safely on disk.
-    - `workers`: processes that share the chunks on this machine (chunk k by worker
-      `k % workers`), each pinned to its own CPU core; this process is worker 0 and
-      writes the outputs once all are done.  Default `None`: one per available core
-      when the sweep runs on the CPU, has at least `AUTO_WORKERS_POINTS` (10^6) points
-      and none of `devices`, `process_index`, `process_count` and `callback` is given;
-      else 1.  `workers > 1` excludes those four.  The arguments are pickled to the
-      workers, so a terrain or distribution class of your own must be importable.
+    - `progress`: show a `rich` progress bar (chunks, points/s).
+    - `max_steps`: `solve_wheel`'s Newton iteration limit.
+    - `run`: `SweepRun(chunk_size, resume, devices, process_index, process_count,
+      callback, workers)`: the chunk size, resuming, and the devices, processes and
+      workers that share the chunks (default: chunks of 8192 rows, resumed, on the
+      local devices, one worker per core from 10^6 points on the CPU).
 
     **Returns:** `SweepResult`.  Rows are read back with `load_sweep` or
     `iter_sweep_chunks`.
@@ -423,37 +437,26 @@ def sweep(
     **Errors:** `ValueError` for out-of-range inputs (naming them), mismatched lengths,
     bad options, or an `out` directory holding a different sweep.
     """
-    given = snow  # the workers get the arguments as given (a model, or its parts)
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(
-        snow, shear, distribution, nodes_per_panel=nodes_per_panel
-    )
+    import jax
+
+    start_time = time.perf_counter()
+    formats = _checked_formats(formats)
+    if not isinstance(run, SweepRun):
+        raise TypeError(f"sweep: run must be a snowjax.SweepRun, got {type(run).__name__}")
+    given = snow  # the workers get the arguments as given
+    chunk_size, devices, callback = run.chunk_size, run.devices, run.callback
+    snow, shear, distribution, _, nodes, terms = _unpack_model(snow)
     try:
         shear = _shear_law(shear)
     except ValueError as err:
         raise ValueError(f"sweep: {err}") from None
-    import jax
-
-    start_time = time.perf_counter()
-    formats = tuple(formats)
-    for fmt in formats:
-        if fmt not in _FORMATS:
-            raise ValueError(f"sweep: formats must be among {_FORMATS}, got {fmt!r}")
     d = _define(
-        wheel,
-        snow,
-        loads,
-        slips,
-        grid=grid,
-        shear=shear,
-        chunk_size=chunk_size,
-        nodes_per_panel=nodes_per_panel,
-        max_steps=max_steps,
-        distribution=distribution,
-        terms=terms,
-    )
-    p_index, p_count = _process(process_index, process_count)
-    custom = (devices, process_index, process_count, callback)
-    n_workers = _worker_count(workers, d, (wheel, snow, distribution), (loads, slips), custom)
+        wheel, snow, loads, slips, grid=grid, shear=shear, chunk_size=chunk_size,
+        nodes_per_panel=nodes, max_steps=max_steps, distribution=distribution, terms=terms,
+    )  # fmt: skip
+    p_index, p_count = _process(run.process_index, run.process_count)
+    custom = (devices, run.process_index, run.process_count, callback)
+    n_workers = _worker_count(run.workers, d, (wheel, snow, distribution), (loads, slips), custom)
     if n_workers > 1:
         p_index, p_count = 0, n_workers
     devices = list(jax.local_devices() if devices is None else devices)
@@ -462,7 +465,7 @@ def sweep(
     out = pathlib.Path(out)
     tag = f"p{p_index}.{os.getpid()}"
     digest = d.digest()
-    _prepare_dir(out, d, digest, resume, tag)
+    _prepare_dir(out, d, digest, run.resume, tag)
 
     mine = [k for k in range(d.n_chunks) if _owner(k, p_count) == p_index]
     done = _chunks_on_disk(out, d, mine, p_index, p_count)
@@ -478,13 +481,9 @@ def sweep(
     ]
     todo += theirs
     if theirs:
-        kwargs: dict[str, Any] = dict(
-            out=out, chunk_size=chunk_size, grid=grid, max_steps=max_steps
-        )
-        if not isinstance(given, ContactModel):
-            kwargs.update(shear=shear, distribution=distribution, nodes_per_panel=nodes_per_panel)
+        kwargs: dict[str, Any] = dict(out=out, grid=grid, max_steps=max_steps)
         cores = _cores()
-        started = _start_workers((wheel, given, loads, slips), kwargs, n_workers, cores)
+        started = _start_workers((wheel, given, loads, slips), kwargs, chunk_size, n_workers, cores)
         if len(cores) >= n_workers and hasattr(os, "sched_setaffinity"):
             affinity = os.sched_getaffinity(0)
             _pin(cores[0])
@@ -526,6 +525,14 @@ def sweep(
         elapsed_s=elapsed,
         points_per_second=computed_points / solve_time if solve_time > 0 else 0.0,
     )
+
+
+def _checked_formats(formats) -> tuple[str, ...]:
+    formats = tuple(formats)
+    for fmt in formats:
+        if fmt not in _FORMATS:
+            raise ValueError(f"sweep: formats must be among {_FORMATS}, got {fmt!r}")
+    return formats
 
 
 def _process(process_index, process_count) -> tuple[int, int]:

@@ -18,6 +18,7 @@ import numpy as np
 
 from .._constants import PLATE_RULE_P_W, THESIS_P_W
 from .._empirical.common import ICE_DENSITY
+from .._wheel.model import _renamed
 
 __all__ = ["ParameterBound", "ValidationModel", "validation_models", "wheel_validation_model"]
 
@@ -167,6 +168,14 @@ def _bekker_lab_snow(rows, grid, diameter):
     return BekkerSoil.thesis_lab_snow()
 
 
+@_renamed(
+    5,
+    "wheel_validation_model(key, label, make_terrain, grid, parameter, ...)",
+    **{
+        name: f"dataclasses.replace(model, {name}=...) on the ValidationModel it returns"
+        for name in ("note", "fixed", "compare_to")
+    },
+)
 def wheel_validation_model(
     key: str,
     label: str,
@@ -178,20 +187,20 @@ def wheel_validation_model(
     tyre_width: float = DEFAULT_TYRE_WIDTH,
     make_wheel: Callable | None = None,
     fit_target: str = "sinkage",
-    note: str = "",
-    fixed: str = "",
     bounds: tuple[ParameterBound, ...] = (),
-    compare_to: str | None = None,
 ) -> ValidationModel:
     """The chapter-4 wheel (`snowjax.solve_wheel`, towed: slip 0, classic shear) on any
     terrain: `make_terrain(rows, grid, diameter)` must return a `snowjax` terrain whose
     leaves broadcast to `(n_rows, len(grid))` (or `(1, len(grid))`); `make_wheel(diameter,
-    width)` the wheel (default `RigidWheel`; e.g. a `DeflectingTire`).  With a `grid`
-    (1-D, or (G, k) for k parameters together, its ends the `bounds`) the model is a
-    calibration, fitted per fold to the measured sinkage (`fit_target="sinkage"`), or to
-    sinkage and R/W together ("both": squared errors in units of `BOTH_SCALES`); without
-    one (`None`) a prediction (`make_terrain` gets a grid of one point, unused).
-    Elements that neither converge nor bottom out are NaN (and never chosen)."""
+    width)` the wheel (default `RigidWheel`; e.g. a `DeflectingTire`), at load
+    `wheel_load` [N] and width `tyre_width` [m].  With a `grid` (1-D, or (G, k) for k
+    parameters together, its ends the `bounds`; `parameter` names its columns, with
+    units) the model is a calibration, fitted per fold to the measured sinkage
+    (`fit_target="sinkage"`), or to sinkage and R/W together ("both": squared errors in
+    units of `BOTH_SCALES`); without one (`None`) a prediction (`make_terrain` gets a
+    grid of one point, unused).  Elements that neither converge nor bottom out are NaN
+    (and never chosen).  The table's texts (`note`, `fixed`, `compare_to`) are set on
+    the returned frozen `ValidationModel` with `dataclasses.replace`."""
 
     def evaluate(rows, points):
         import jax.numpy as jnp
@@ -220,10 +229,7 @@ def wheel_validation_model(
         grid=None if grid is None else np.asarray(grid),
         fit_target=None if grid is None else fit_target,
         parameter=parameter,
-        note=note,
-        fixed=fixed,
         bounds=bounds,
-        compare_to=compare_to,
     )
 
 
@@ -355,8 +361,10 @@ def _wheel_models(w_n: float, b: float) -> list[ValidationModel]:
     """The chapter-4 wheel and the deflecting tyre on each snow of the comparison, at wheel
     load w_n [N] and tyre width b [m]."""
 
-    def wheel_model(*args, **kwargs):  # the chapter-4 wheel at this load and width
-        return wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
+    def wheel_model(*args, note="", fixed="", compare_to=None, **kwargs):
+        # the chapter-4 wheel at this load and width, with the table's texts
+        model = wheel_validation_model(*args, wheel_load=w_n, tyre_width=b, **kwargs)
+        return dataclasses.replace(model, note=note, fixed=fixed, compare_to=compare_to)
 
     table41 = "c = 0.2165 p_w, tan phi = 0.0787, K = D/73.6 (Table 4.1)"
     civ = "p_i = 103 kPa (CRREL 95-7 Table 2), p_c = 0 and section height 0.75 b (assumed)"

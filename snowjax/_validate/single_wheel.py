@@ -44,6 +44,7 @@ from .._wheel.distribution import WongReece
 from .._wheel.equilibrium import solve_wheel
 from .._wheel.geometry import RigidWheel
 from .._wheel.lateral import Lateral
+from .._wheel.model import ContactModel
 
 __all__ = [
     "SingleWheelData",
@@ -286,20 +287,21 @@ def single_wheel_study(
     fits = {}
     for bulldozing in (False, True):
         lateral = Lateral(0.021, SAND_UNIT_WEIGHT, bulldozing=bulldozing)
+        measured = {"sinkage": data.sinkage[sel], "drawbar_pull": data.fx[sel],
+                    "lateral_force": data.fy[sel]}  # fmt: skip
         fits[bulldozing] = fit_wheel(
-            wheel, terrain, data.fz[sel], data.slip[sel],
-            sinkage=data.sinkage[sel], drawbar_pull=data.fx[sel],
-            lateral_force=data.fy[sel], slip_angle=data.slip_angle[sel],
-            distribution=dist, lateral=lateral, fit=FIT_NAMES, max_steps=max_steps,
+            wheel, ContactModel(terrain, dist, lateral=lateral), data.fz[sel], data.slip[sel],
+            measured, slip_angle=data.slip_angle[sel], fit=FIT_NAMES, max_steps=max_steps,
             scale=RESIDUAL_SCALES,
         )  # fmt: skip
     bulldozing = bool(fits[True].sse < fits[False].sse)
     best = fits[bulldozing]
     rows = np.flatnonzero(data.in_range)
+    fitted = ContactModel(
+        best.info["terrain"], best.info["distribution"], lateral=best.info["lateral"]
+    )
     st = solve_wheel(
-        wheel, best.info["terrain"], data.fz[rows], data.slip[rows],
-        distribution=best.info["distribution"], slip_angle=data.slip_angle[rows],
-        lateral=best.info["lateral"],
+        wheel, fitted, data.fz[rows], data.slip[rows], slip_angle=data.slip_angle[rows]
     )  # fmt: skip
     n = data.fz.shape[0]
     predicted = {k: np.full(n, np.nan) for k in ("fx", "fy", "sinkage")}

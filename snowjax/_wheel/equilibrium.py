@@ -3,10 +3,10 @@
 `solve_wheel` finds the entry angle theta0 at which the vertical resultant of the rim
 stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton
 kept inside a bracket, `BracketedNewton`): one solver (`_solve_layout`) for every
-terrain, stress distribution, shear law and slip angle, whose start is the closed-form
-no-shear balance where the terrain offers closed forms of its rim integrals
-(`_closed_form_start`: `WongSnow` on the front region) and a scan of W otherwise
-(`_scan_start`).
+terrain, stress distribution, shear law and slip angle, which takes its contact
+integrals and its start from the contact rule (`rules.py`: the any-terrain rule, whose
+start is a scan of W, or the closed-form accelerations of `front_rim.py` where the
+terrain offers them, started from the closed-form no-shear balance).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
@@ -38,16 +38,9 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .bracketed import solve_elementwise
-from .contact import (
-    ShearModel,
-    _broadcast_leaves,
-    _clearance,
-    _closed_form_rule,
-    _contact_batch,
-    _layout,
-    _with_rule_for,
-)
-from .distribution import AbstractStressDistribution, _as_distribution
+from .contact import _broadcast_leaves, _contact_batch, _layout, _with_rule_for
+from .distribution import _as_distribution
+from .front_rim import _contact_rule
 from .geometry import AbstractWheel
 from .inputs import (
     _broadcast_shape,
@@ -61,9 +54,10 @@ from .inputs import (
     _validate_eagerly,
 )
 from .lateral import Lateral
-from .model import ContactModel, _unpack_model
+from .model import ContactModel, _takes_model, _unpack_model
 from .root import _implicit_root, _root_outputs
-from .shear_law import AbstractShearLaw, _shear_law
+from .shear_law import _shear_law
+from .start import _balance_residual, _theta_from_s
 from .status import Status, _throw_on_failure
 from .terms import _term_rules
 
@@ -117,86 +111,6 @@ def _tolerance(dtype) -> float:
     return 1e-9 if dtype == jnp.float64 else 2e-5
 
 
-S_MIN = 1e-6  # lower bound of the solver variable s (theta0 = theta_cap exp(-s^2))
-
-
-def _s_min(dtype) -> float:
-    """S_MIN in float64; 1e-3 in float32, where theta_cap exp(-1e-12) rounds to theta_cap
-    (the base itself, where Wong's pressure is infinite); 1e-3 keeps theta0 <= (1 - 1e-6)
-    theta_cap."""
-    return S_MIN if jnp.dtype(dtype) == jnp.float64 else 1e-3
-
-
-S_MAX = 4.0  # theta0 = 1.1e-7 theta_cap: a contact that carries next to nothing
-
-
-def _balance_residual(w, target):
-    """ln(W / target), floored at ln(1e-30) where W <= 0 (a braked wheel's W can be)."""
-    return jnp.log(jnp.maximum(w, 1e-30 * target) / target)
-
-
-def _theta_from_s(s, theta_cap):
-    return theta_cap * jnp.exp(-(s**2))
-
-
-def _newton_s(residual, s, steps):
-    """A few plain Newton steps on an elementwise residual of s (for the initial guess)."""
-
-    def step(_, s):
-        f, df = jax.jvp(residual, (s,), (jnp.ones_like(s),))
-        delta = jnp.where(df < 0, f / jnp.where(df < 0, df, -1.0), 0.0)
-        # Damped: at s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a
-        # full step can overshoot to where W underflows (float32).
-        return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
-
-    return jax.lax.fori_loop(0, steps, step, s)
-
-
-def _no_shear_load(theta0, diameter, width, terrain):
-    """W without shear stress on the front region, in closed form [N]:
-    r b int_0^theta0 sigma cos(theta) dtheta (`AbstractTerrain.front_rim_integrals`)."""
-    clearance = _clearance(theta0, diameter, terrain)
-    return diameter / 2 * width * terrain.front_rim_integrals(theta0, diameter, clearance)[0]
-
-
-def _surface_stiffness(terrain, width, like):
-    """k = dsigma/dz [Pa/m] of the law at the surface (Wong's law: p_w / z_w)."""
-    zero, one = jnp.zeros_like(like), jnp.ones_like(like)
-    return jax.jvp(lambda z: terrain.pressure(z, width), (zero,), (one,))[1]
-
-
-def _initial_guess(theta_cap, load, diameter, width, terrain, stiffness):
-    """Solver start s0 from the no-shear load balance, using its closed form.
-
-    Starting from the small-angle law W ~ r b (r k) theta0^3 / 3, k = `stiffness`
-    (`_surface_stiffness`), three Newton steps on `ln(W_no_shear(theta0) / F_z)`
-    (`_no_shear_load`) refine the guess; the shear stress adds to W for a driven wheel,
-    so the true theta0 is a little lower.
-    """
-    r = diameter / 2
-    theta = jnp.cbrt(3 * load / (r * width * r * stiffness))
-    s_min = _s_min(theta.dtype)
-    s = jnp.sqrt(jnp.maximum(-jnp.log(jnp.minimum(theta / theta_cap, 1.0)), s_min**2))
-
-    def residual(s):
-        w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, terrain)
-        return _balance_residual(w, load)
-
-    return jax.lax.stop_gradient(_newton_s(residual, jnp.clip(s, s_min, S_MAX), 3))
-
-
-def _warm_start(guess, theta_cap):
-    """Solver start s0 from a previous entry angle (e.g. the last simulation step).
-
-    Non-finite or non-positive guesses fall back to theta_cap / 2.
-    """
-    ok = jnp.isfinite(guess) & (guess > 0)
-    ratio = jnp.clip(jnp.where(ok, guess, 0.5 * theta_cap) / theta_cap, jnp.exp(-(S_MAX**2)), 1.0)
-    s_min = _s_min(ratio.dtype)
-    s = jnp.sqrt(jnp.maximum(-jnp.log(ratio), s_min**2))
-    return jax.lax.stop_gradient(jnp.clip(s, s_min, S_MAX))
-
-
 def _entry_angle_cap(depth, diameter):
     """(theta_cap, reaches_base): the largest admissible entry angle [rad], the base's
     arccos(1 - 2 depth / D) capped at 85 degrees, and whether the base lies within it.
@@ -216,107 +130,6 @@ def _entry_angle_cap(depth, diameter):
 
 
 # ---------------------------------------------------------------------------------------
-# Where Newton starts: the bracket, the target and the first iterate
-# ---------------------------------------------------------------------------------------
-
-
-def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shear):
-    """(over, target, lower, upper, s0) from the closed-form no-shear load (a terrain
-    with `front_rim_integrals` on the front region).
-
-    The capacity of the layer is W at s_min.  For slip >= 0 the shear stress only adds to
-    W, so loads below the closed-form no-shear capacity are known to be carried and the
-    quadrature is only needed if some element brakes or is heavier than that (a
-    `lax.cond` that costs nothing when not needed).  The start is the closed-form
-    no-shear balance, corrected once by the shear stress's share of W (one quadrature
-    at the no-shear guess gives W / W_no_shear, and the closed form is re-solved for
-    load / factor: the guess's error falls from ~4 % to ~0.3 %, one Newton step fewer),
-    or the warm start.
-    """
-    diameter, width = wheel.diameter, wheel.width
-    s_min = jnp.full_like(load, _s_min(load.dtype))
-    theta_top = _theta_from_s(s_min, theta_cap)
-    no_shear_capacity = _no_shear_load(theta_top, diameter, width, snow)
-    surely_carried = (no_shear_capacity > load * (1 + 1e-6)) & (slip >= 0)
-    capacity = jax.lax.cond(
-        jnp.all(surely_carried), lambda: jnp.full_like(load, jnp.inf), lambda: vertical(theta_top)
-    )
-    over = load >= capacity
-    # Elements that cannot be balanced are solved for half their capacity (any solvable
-    # target would do) so that the batch's Newton iteration terminates quickly.
-    target = jnp.where(over, 0.5 * capacity, load)
-    if guess is not None:
-        s0 = _warm_start(guess, theta_cap)
-    else:
-        stiffness = _surface_stiffness(snow, width, load)
-        s0 = _initial_guess(theta_cap, target, diameter, width, snow, stiffness)
-        if shear.mobilises:
-            theta_g = _theta_from_s(s0, theta_cap)
-            w_ns = _no_shear_load(theta_g, diameter, width, snow)
-            factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
-            factor = jax.lax.stop_gradient(factor)
-            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow, stiffness)
-    return over, target, s_min, jnp.full_like(load, S_MAX), s0
-
-
-def _scan_grid(terrain, dtype):
-    """Solver variable s at which W is scanned before Newton (increasing: deep to shallow).
-
-    s^2 = S_MIN^2, 8 and S_MAX^2 = 16 (theta0 = the cap, e^-8 of it and 1e-7 of it): W is
-    monotone except for a braked wheel's backward shear, so the grid only has to start
-    Newton, by interpolating ln W linearly in s^2 (exact for a power law) inside the
-    interval that brackets the root.  For a law whose pressure can fall
-    (`AbstractTerrain.pressure_rises` False: `LayeredSnow`, whose W(theta0) can fall after
-    the ice breaks), s^2 from S_MIN^2 to S_MAX^2 in steps of 2 plus 39 points with
-    theta0 / theta_cap evenly spaced in [0.1, 1] (steps of 0.023) resolve the crust's
-    peak; a peak narrower than that can be missed (then a deeper root is returned).
-    """
-    if not terrain.pressure_rises():
-        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
-        s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
-    else:
-        s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 3)
-    return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
-
-
-def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
-    """(over, target, lower, upper, s0) from a scan of W over entry angles (any terrain).
-
-    Without a warm start, W is evaluated on a grid of entry angles (`_scan_grid`); the
-    shallowest grid interval where W crosses the load brackets the root (for a layered
-    snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
-    and interpolating ln W linearly in s^2 inside it (exact for a power law) gives s0.
-    With a warm start, the bracket is the whole range and the capacity W at s_min.
-    """
-    del slip, wheel, shear
-    dtype = load.dtype
-    s_min = jnp.full_like(load, _s_min(dtype))
-    if guess is not None:
-        w_top = vertical(_theta_from_s(s_min, theta_cap))
-        over = w_top < load
-        target = jnp.where(over, 0.5 * w_top, load)
-        return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
-    s_grid = _scan_grid(terrain, dtype)
-    points = s_grid.shape[0]
-    w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
-        jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
-    )
-    over = ~jnp.any(w_grid >= load, axis=0)
-    target = jnp.where(over, 0.5 * w_grid[0], load)
-    carried = w_grid >= target
-    # The shallowest grid point that carries the target (largest s), kept <= K - 2.
-    k = jnp.clip(points - 1 - jnp.argmax(carried[::-1], axis=0), 0, points - 2)
-    lower, upper = s_grid[k], s_grid[k + 1]
-    w_lo = jnp.take_along_axis(w_grid, k[None], 0)[0]
-    w_hi = jnp.take_along_axis(w_grid, k[None] + 1, 0)[0]
-    tiny = jnp.finfo(dtype).tiny  # (1e-300 is 0 in float32: log(0 / target) - log(0) is NaN)
-    f_lo = jnp.log(jnp.maximum(w_lo, tiny) / target)
-    f_hi = jnp.log(jnp.maximum(w_hi, tiny) / target)
-    frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
-    return over, target, lower, upper, jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
-
-
-# ---------------------------------------------------------------------------------------
 # The solve
 # ---------------------------------------------------------------------------------------
 
@@ -327,9 +140,8 @@ def _solve_layout(
     """Equilibrium of a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
     Every terrain, distribution, shear law and slip angle: the contact integrals come from
-    `_contact_batch` (the closed-form rule or the any-terrain rule), the start from
-    `_closed_form_start` (a terrain with closed-form rim integrals on the front region,
-    straight running) or `_scan_start`.  The batch is one `optx.root_find`
+    `_contact_batch`, the start from the contact rule in `options` (`rules.py`).  The
+    batch is one `optx.root_find`
     (`BracketedNewton`: Newton kept inside a bracket, bisecting where a step would leave
     it) with a diagonal Jacobian (the elements are independent), so a Newton step is one
     tangent evaluation.  Every element's root lies in [lower, upper]: W > target at the
@@ -340,7 +152,7 @@ def _solve_layout(
     the model's own force terms (leaves per element).
     Returns (theta0, R, T, M, F_y, M_z, status).
     """
-    shear, n, max_steps, closed_form = options
+    shear, n, max_steps, rule = options
     # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
     # the solve runs on stopped copies of the inputs.
     differentiable = (wheel, terrain, distribution, load, slip, side, terms)
@@ -353,7 +165,7 @@ def _solve_layout(
         shear=shear,
         n=n,
         braking=braking,
-        closed_form=closed_form,
+        rule=rule,
         bulldozing=bulldozing,
     )
 
@@ -363,8 +175,7 @@ def _solve_layout(
             contact(theta0, slip, wheel, terrain, distribution, side, terms, vertical_only=True),
         )
 
-    start = _closed_form_start if closed_form else _scan_start
-    over, target, lower, upper, s0 = start(
+    over, target, lower, upper, s0 = rule.start(
         vertical, theta_cap, load, slip, guess, wheel, terrain, shear
     )
 
@@ -426,15 +237,6 @@ def _safe_inputs(valid, wheel, terrain, distribution, terms, load, slip):
     return wheel, terrain, distribution, terms, pick(load, 5000.0), pick(slip, 0.2)
 
 
-def _flush_tiny_slip(slip):
-    """Slips below the input magnitude window (1.2e-77 in float64, 1.1e-10 in float32) are
-    0 in value, keeping the gradient 1: the braking quadrature's layout divides by
-    quantities proportional to the slip, which underflow for a float32 slip of 1e-38."""
-    small, _ = _magnitude_window(slip.dtype)
-    flushed = jnp.where(jnp.abs(slip) < small, 0.0, slip)
-    return slip + jax.lax.stop_gradient(flushed - slip)
-
-
 # Elements solved together in one Newton iteration.  On a CPU, chunks keep the
 # quadrature's (chunk, nodes) intermediates in cache and let each chunk stop iterating on
 # its own; an accelerator needs wide chunks to fill it (1 GB of intermediates in float64).
@@ -490,10 +292,10 @@ def _solve_jit(
 ):
     """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
 
-    `options` = (shear law, nodes, max_steps, closed_form), static; `layout` "driving",
+    `options` = (shear law, nodes, max_steps, contact rule), static; `layout` "driving",
     "braking" or "auto" (`_with_rule_for`).
     """
-    shear, n, max_steps, closed_form = options
+    shear, n, max_steps, rule = options
     trees = (wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral)
     shape, dtype, trees = _broadcast_leaves(*trees)
     wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral = trees
@@ -504,15 +306,14 @@ def _solve_jit(
     wheel, terrain, distribution, terms, load, slip = _safe_inputs(
         valid, wheel, terrain, distribution, terms, load, slip
     )
-    if closed_form:
-        slip = _flush_tiny_slip(slip)
+    slip = rule.prepare_slip(slip)
     side, bulldozing = _side(valid, slip_angle, lateral)
 
     def solve(ops):
         def layout_solve(braking):
             return _solve_layout(
                 *ops,
-                options=(shear, n[braking], max_steps, closed_form),
+                options=(shear, n[braking], max_steps, rule),
                 braking=braking,
                 bulldozing=bulldozing,
             )
@@ -537,17 +338,14 @@ def _solve_jit(
     )
 
 
+@_takes_model(positional=4)
 def solve_wheel(
     wheel: AbstractWheel,
     terrain: Terrain | ContactModel,
     load: Float[ArrayLike, "..."],
     slip: Float[ArrayLike, "..."],
-    shear: ShearModel | AbstractShearLaw = "classic",
     *,
-    distribution: AbstractStressDistribution | None = None,
     slip_angle: Float[ArrayLike, "..."] | None = None,
-    lateral: Lateral | None = None,
-    nodes_per_panel: int | None = None,
     max_steps: int = 64,
     initial_entry_angle: Float[ArrayLike, "..."] | None = None,
     throw: bool = False,
@@ -580,18 +378,30 @@ def solve_wheel(
       k_phi [N/m^(n+2)], cohesion [Pa], tan_phi [-], shear_modulus=[m])`,
       `ReeceSoil(n, k_c_prime [-], k_phi_prime [-], unit_weight [N/m^3], cohesion [Pa],
       tan_phi, shear_modulus=[m])` or `LayeredSnow(top, bottom, ice_failure_pressure [Pa])`;
-      or a `ContactModel` bundling the terrain with `shear`, `distribution`, `lateral`
-      and `nodes_per_panel` (then leave those keywords out).
+      or a `ContactModel(terrain, distribution, shear, lateral, nodes_per_panel,
+      terms)` (a bare terrain is `ContactModel(terrain)`: the front region, Janosi–Hanamoto
+      shear, the accurate quadrature, no terms of your own):
+      - `shear`: the shear law, a module or its name: `JanosiHanamoto()` / `"classic"`
+        (4.11), `ThesisSimplified()` / `"simplified"` (the thesis's model, 4.13;
+        `WongSnow` on the front region only) or `NoShear()` / `"none"` (normal stress
+        only).
+      - `distribution`: `FrontRegion()` or None (the thesis's front region),
+        `WongReece(c1, c2, c3)`, or any `AbstractStressDistribution`.
+      - `lateral`: `Lateral(shear_modulus=K_y [m] or None, unit_weight [N/m^3],
+        bulldozing=False)`; default `Lateral()`: K_y = the terrain's modulus, no
+        sidewall bulldozing.  Used only with a `slip_angle`.
+      - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  `WongSnow`
+        without a distribution: two panels when all slips are >= 0, four with braking;
+        defaults classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified
+        24 + 24 and 4 x 16, none 8 + 8.  Other terrains / Wong–Reece: 12 nodes per
+        half-panel, 16 when the batch brakes.  With the defaults every contact integral
+        is within 1e-7 (relative) of adaptive quadrature over the documented range.  An
+        integer sets all.
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [-1, 1] (eq. 2.6: 0 free rolling, 1 spinning in
       place).  Negative slip is braking: the shear displacement, and with it the shear
       stress, thrust and torque, change sign (the Janosi–Hanamoto factor is mirrored,
       `-(1 - exp(-|j|/K))`), so a braked wheel gets a negative thrust.
-    - `shear`: the shear law, a module or its name: `JanosiHanamoto()` / `"classic"`
-      (4.11), `ThesisSimplified()` / `"simplified"` (the thesis's model, 4.13; `WongSnow`
-      on the front region only) or `NoShear()` / `"none"` (normal stress only).
-    - `distribution`: `FrontRegion()` or None (the thesis's front region), `WongReece(c1,
-      c2, c3)`, or any `AbstractStressDistribution`.
     - `slip_angle`: beta [rad], |beta| < pi/2, broadcasts like `slip`: the angle between
       the wheel's heading and its direction of travel, positive when the wheel moves
       towards -y of its own frame (velocity (V cos beta, -V sin beta); x along the heading,
@@ -606,16 +416,6 @@ def solve_wheel(
       traced or non-zero `slip_angle` takes the any-terrain quadrature (also for
       `WongSnow` without a distribution), which at beta = 0 agrees with the straight
       results within its accuracy (1e-7); `shear="simplified"` is refused with it.
-    - `lateral`: `Lateral(shear_modulus=K_y [m] or None, unit_weight [N/m^3],
-      bulldozing=False)`; default `Lateral()`: K_y = the terrain's modulus, no sidewall
-      bulldozing.  Used only with a `slip_angle`.
-    - `nodes_per_panel`: Gauss–Legendre nodes per quadrature panel.  `WongSnow` without
-      a distribution: two panels when all slips are >= 0, four with braking; defaults
-      classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified 24 + 24 and
-      4 x 16, none 8 + 8.  Other
-      terrains / Wong–Reece: 12 nodes per half-panel, 16 when the batch brakes.  With
-      the defaults every contact integral is within 1e-7 (relative) of adaptive
-      quadrature over the documented range.  An integer sets all.
     - `max_steps`: Newton iteration limit.
     - `initial_entry_angle`: optional warm start theta0 [rad] (broadcasts like `load`),
       e.g. the previous time step's `entry_angle` inside a simulation; it replaces the
@@ -655,21 +455,17 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
-    terrain, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(
-        terrain, shear, distribution, lateral=lateral, nodes_per_panel=nodes_per_panel
-    )
+    terrain, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(terrain)
     shear = _shear_law(shear)
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
     _check_model(wheel, terrain, distribution, shear)
     distribution = _as_distribution(distribution)
-    _check_options(nodes_per_panel, max_steps)
+    _check_options(max_steps)
     load = _numeric_argument("load", load)
     slip = _numeric_argument("slip", slip)
     if initial_entry_angle is not None:
         initial_entry_angle = _numeric_argument("initial_entry_angle", initial_entry_angle)
-    if lateral is not None and not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
     if slip_angle is not None:
         slip_angle = _numeric_argument("slip_angle", slip_angle)
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
@@ -688,7 +484,7 @@ def solve_wheel(
         if not shear.lateral:
             raise ValueError(
                 f"shear={shear.name!r} ({type(shear).__name__}) has no lateral counterpart: "
-                "use shear='classic' (or 'none') with a slip_angle."
+                "use ContactModel(terrain, shear='classic') (or 'none') with a slip_angle."
             )
     side_trees = (slip_angle, lateral)  # both None without a slip angle
     shape = _broadcast_shape(
@@ -707,10 +503,9 @@ def solve_wheel(
         rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
         rules += _term_rules(jax.tree_util.tree_map(concrete, terms))
         _check_rules(rules, dtype, *_magnitude_window(dtype))
-    closed_form = slip_angle is None and _closed_form_rule(terrain, distribution, wheel)
-    nodes = type(shear).nodes(shear, nodes_per_panel, closed_form)  # unbound: see inputs
-    options = (shear, nodes, int(max_steps), closed_form)
-    layout = _layout(slip, warm_start=closed_form and initial_entry_angle is not None)
+    rule = _contact_rule(terrain, distribution, wheel, straight=slip_angle is None)
+    options = (shear, rule.nodes(shear, nodes_per_panel), int(max_steps), rule)
+    layout = _layout(slip, warm_start=rule.warm_layout and initial_entry_angle is not None)
     state = _solve_jit(
         wheel,
         terrain,

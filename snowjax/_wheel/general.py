@@ -1,12 +1,12 @@
 """Contact integrals of any wheel on any terrain law, with any stress distribution (the
 any-terrain rule), and the quadrature's node maps.
 
-`general_contact` is the rule the contact entry (`contact._contact_batch`) takes for
-every combination except the plain rim (constant width) on a law with closed-form rim
-integrals (`WongSnow`) on the front region running straight, which takes the
-closed-form rule (`contact._closed_form_contact`); both rules build their nodes from the
-maps here (`_power_map`, `_sinh_offsets`) and find the braking sign change with
-`geometry._shear_sign_change`.  The wheel's geometry comes from its contact
+`general_contact` is the integrator of `AnyTerrainRule`, the rule the contact entry
+(`contact._contact_batch`) takes for every combination except the plain rim (constant
+width) on a law with closed-form rim integrals (`WongSnow`) on the front region running
+straight, which takes the accelerations of `front_rim.py` (`FrontRimRule`); both rules
+build their nodes from the maps here (`_power_map`, `_sinh_offsets`) and find the
+braking sign change with `geometry._shear_sign_change`.  The wheel's geometry comes from its contact
 (`AbstractContact`: the rim's, or a tyre's flat).
 
 The rim stresses (normal stress from the terrain's pressure–sinkage law at the rim
@@ -32,6 +32,7 @@ on them).
 from __future__ import annotations
 
 import functools
+from typing import ClassVar
 
 import jax
 import jax.numpy as jnp
@@ -46,6 +47,8 @@ from .geometry import (
     _shear_displacement_slope,
     _sincos_half,
 )
+from .rules import AbstractContactRule
+from .start import _scan_start
 from .terms import (
     ContactNodes,
     FlexingResistance,
@@ -326,3 +329,32 @@ def _terms(law, side, bulldozing) -> tuple:
         return (TerrainStresses(law), FlexingResistance())
     terms = (TerrainStresses(law, side[1], combined=True), FlexingResistance())
     return terms + ((SidewallBulldozing(side[2]),) if bulldozing else ())
+
+
+class AnyTerrainRule(AbstractContactRule):
+    """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
+    by a scan of W over entry angles (`start._scan_start`)."""
+
+    warm_layout: ClassVar[bool] = False
+
+    def nodes(self, law, nodes_per_panel) -> tuple:
+        """Nodes per half-panel without and with braking: the law's `nodes_any_terrain`,
+        or `nodes_per_panel` for both."""
+        if nodes_per_panel is not None:
+            return (nodes_per_panel, nodes_per_panel)
+        if law.nodes_any_terrain is None:
+            raise ValueError(f"the shear law {type(law).__name__} has no any-terrain rule")
+        return law.nodes_any_terrain
+
+    def start(self, vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
+        return _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear)
+
+    def contact(
+        self, contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
+        bulldozing, terms, bottomed, moving_rule,
+    ):  # fmt: skip
+        del bottomed, moving_rule  # its nodes move with theta0 by construction
+        return general_contact(
+            contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
+            bulldozing, terms,
+        )  # fmt: skip

@@ -142,14 +142,12 @@ def _broadcast_shape(
         ) from None
 
 
-def _check_options(nodes_per_panel, max_steps) -> None:
+def _check_options(max_steps) -> None:
+    """`solve_wheel`'s Newton limit (the nodes per panel are checked by `ContactModel`)."""
+
     def integer(x):
         return isinstance(x, (int, np.integer)) and not isinstance(x, (bool, np.bool_))
 
-    if nodes_per_panel is not None and not (integer(nodes_per_panel) and nodes_per_panel >= 1):
-        raise TypeError(
-            f"solve_wheel: nodes_per_panel must be None or an integer >= 1, got {nodes_per_panel!r}"
-        )
     if not (integer(max_steps) and max_steps >= 1):
         raise ValueError(f"solve_wheel: max_steps must be an integer >= 1, got {max_steps!r}")
 

@@ -4,15 +4,20 @@ settings and force terms of your own of the wheel–terrain contact, as one modu
 The functions that solve or integrate the wheel's contact take a `ContactModel` in place
 of the terrain (`solve_wheel`, `contact_forces`, `wheel_forces`, both simulations,
 `snowjax.mjx`, `sweep`, `fit_wheel`, `tire_forces_on_snow`; not the per-point stresses
-`normal_stress` / `shear_stress`, nor the plate fits); the separate keywords (`shear=`,
-`distribution=`, `lateral=`, `nodes_per_panel=`) keep working for a bare terrain.
+`normal_stress` / `shear_stress`, nor the plate fits); a bare terrain stands for
+`ContactModel(terrain)`.  Those functions have no `shear=`, `distribution=`, `lateral=`
+or `nodes_per_panel=` keywords of their own: given, they raise a `TypeError` naming the
+model's spelling.
 """
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable
 from typing import Any
 
 import equinox as eqx
+import numpy as np
 
 from .._terrain.base import AbstractTerrain
 from .distribution import AbstractStressDistribution, _as_distribution, _is_front
@@ -26,11 +31,13 @@ __all__ = ["ContactModel"]
 def _nodes_option(nodes_per_panel):
     if nodes_per_panel is None:
         return None
-    if isinstance(nodes_per_panel, bool) or not isinstance(nodes_per_panel, int):
+    if isinstance(nodes_per_panel, (bool, np.bool_)) or not isinstance(
+        nodes_per_panel, (int, np.integer)
+    ):
         raise TypeError(f"nodes_per_panel must be None or an int, got {nodes_per_panel!r}")
     if nodes_per_panel < 2:
         raise ValueError(f"nodes_per_panel must be >= 2, got {nodes_per_panel}")
-    return nodes_per_panel
+    return int(nodes_per_panel)
 
 
 class ContactModel(eqx.Module):
@@ -60,9 +67,9 @@ class ContactModel(eqx.Module):
     `jax.grad(lambda m: solve_wheel(wheel, m, load, slip).drawbar_pull)(model)`.  The
     combination is checked when the model is built (a `ValueError` for a shear law that
     does not apply to the terrain or distribution, e.g. `ThesisSimplified()` on Bekker
-    soil).  Pass it where a function takes a terrain and leave that function's
-    `shear`, `distribution`, `lateral` and `nodes_per_panel` keywords at their defaults
-    (giving both raises `TypeError`).
+    soil).  Pass it where a function takes a terrain (a bare terrain stands for
+    `ContactModel(terrain)`), e.g. `solve_wheel(wheel, ContactModel(snow,
+    shear="simplified"), load, slip)`.
     """
 
     terrain: AbstractTerrain
@@ -90,34 +97,12 @@ class ContactModel(eqx.Module):
         type(self.shear).check(self.shear, self.terrain, self.distribution)
 
 
-def _unpack_model(
-    terrain: Any,
-    shear: Any = "classic",
-    distribution: Any = None,
-    lateral: Any = None,
-    nodes_per_panel: Any = None,
-) -> tuple[Any, Any, Any, Any, Any, tuple]:
+def _unpack_model(terrain: Any) -> tuple[Any, Any, Any, Any, Any, tuple]:
     """(terrain, shear, distribution, lateral, nodes_per_panel, terms) of a
-    `ContactModel`, or the arguments unchanged (and no terms) for a bare terrain.
-    `TypeError` if a model comes with any of the keywords set (other than to their
-    defaults)."""
+    `ContactModel`; a bare terrain is `ContactModel(terrain)`'s defaults (its checks are
+    left to the caller's, which name the argument)."""
     if not isinstance(terrain, ContactModel):
-        return terrain, shear, distribution, lateral, nodes_per_panel, ()
-    given = [
-        name
-        for name, value, default in (
-            ("shear", shear, "classic"),
-            ("distribution", distribution, None),
-            ("lateral", lateral, None),
-            ("nodes_per_panel", nodes_per_panel, None),
-        )
-        if not (value is default or (isinstance(value, str) and value == default))
-    ]
-    if given:
-        raise TypeError(
-            f"{', '.join(given)} given both by the ContactModel and as keyword: set "
-            "them in the model (eqx.tree_at or a new ContactModel) and leave the keywords out"
-        )
+        return terrain, "classic", None, None, None, ()
     model = terrain
     # The front region as None, the spelling the functions' defaults use (one compiled
     # program for both spellings).
@@ -130,3 +115,53 @@ def _unpack_model(
         model.nodes_per_panel,
         model.terms,
     )
+
+
+def _with_terrain(model: Any, terrain: AbstractTerrain) -> Any:
+    """A terrain or `ContactModel` with its terrain replaced by `terrain` (e.g. a `Rut`
+    of it): the model's other parts kept, unchecked (the solver checks the pair)."""
+    if not isinstance(model, ContactModel):
+        return terrain
+    return eqx.tree_at(lambda m: m.terrain, model, terrain)
+
+
+_MODEL_PARTS = {
+    name: f"ContactModel(terrain, {name}=...) in place of the terrain"
+    for name in ("shear", "distribution", "lateral", "nodes_per_panel")
+}
+
+
+def _renamed(positional: int, hint: str, **spellings: str) -> Callable[[Callable], Callable]:
+    """Decorate a public function whose keywords in `spellings` (name -> new spelling)
+    were grouped into modules: given, they raise a `TypeError` naming the new spelling;
+    more than `positional` positional arguments raise one that ends with `hint`."""
+
+    def decorate(function: Callable) -> Callable:
+        name = function.__name__
+
+        @functools.wraps(function)
+        def wrapper(*args, **kwargs):
+            for key in kwargs.keys() & spellings.keys():
+                raise TypeError(f"{name}({key}=...) is now spelled {spellings[key]}")
+            if len(args) > positional:
+                raise TypeError(
+                    f"{name} takes {positional} positional arguments, got {len(args)}: {hint}"
+                )
+            return function(*args, **kwargs)
+
+        return wrapper
+
+    return decorate
+
+
+def _takes_model(positional: int, **moved: str) -> Callable[[Callable], Callable]:
+    """`_renamed` for a function whose terrain argument may be a `ContactModel`: the
+    model's parts (`shear=`, `distribution=`, `lateral=`, `nodes_per_panel=`), once
+    keywords or trailing positional arguments of the function (the shear law and nodes
+    per panel were once positional), and the keywords in `moved`."""
+    hint = (
+        "the shear law, stress distribution, lateral law and nodes per panel are set in "
+        "the contact model, passed in place of the terrain: ContactModel(terrain, "
+        "shear=..., distribution=...)"
+    )
+    return _renamed(positional, hint, **(_MODEL_PARTS | moved))

@@ -9,6 +9,10 @@ elastic rebound leaves the state as it was: the next identical wheel repeats it)
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -21,7 +25,7 @@ from .._terrain.rut import Rut
 from .._terrain.rut_map import RutMap, _check_modulus
 from .equilibrium import solve_wheel
 from .geometry import AbstractWheel
-from .shear_law import AbstractShearLaw, ShearModel
+from .model import ContactModel, _takes_model, _unpack_model, _with_terrain
 
 __all__ = ["PassResult", "PathResult", "Ruts", "drive_path", "multi_pass", "track_offset"]
 
@@ -43,32 +47,32 @@ class PassResult(eqx.Module):
     status: Int[Array, "... n"]
 
 
+@_takes_model(positional=6)
 def multi_pass(
     wheel: AbstractWheel,
-    terrain: AbstractTerrain,
+    terrain: AbstractTerrain | ContactModel,
     loads: Float[ArrayLike, "... n"],
     slip: Float[ArrayLike, "..."],
     k_0: Float[ArrayLike, "..."],
     a_u: Float[ArrayLike, "..."],
-    *,
-    distribution=None,
-    shear: ShearModel | AbstractShearLaw = "classic",
 ) -> PassResult:
     """n wheels in one track, one after the other (a convoy, a tandem axle).
 
     **Arguments:**
 
     - `wheel`: every pass's wheel (`RigidWheel`, `DeflectingTire`, ...).
-    - `terrain`: the virgin terrain (any law).
+    - `terrain`: the virgin terrain (any law), or a `ContactModel` of it (its shear
+      law, stress distribution, nodes per panel and force terms act in every pass, the
+      later passes on a `Rut` of its terrain).
     - `loads`: F_z of each pass [N], the passes along the last axis (leading axes batch).
     - `slip`: driving slip of every pass [-] (broadcast against `loads`).
     - `k_0` [Pa/m], `a_u` [Pa/m^2]: the unloading modulus k_u = k_0 + A_u z_u of the
       terrain (`Rut`).
-    - `distribution`, `shear`: as in `solve_wheel`.
 
     **Returns:** a `PassResult`.  Differentiable in every input (the rut's state is a
     running maximum: its derivative follows the pass that set it).
     """
+    model, virgin = terrain, _unpack_model(terrain)[0]
     loads = jnp.asarray(loads, float)
     slips = jnp.broadcast_to(jnp.asarray(slip, loads.dtype), loads.shape)
     z_max = jnp.zeros(loads.shape[:-1], loads.dtype)
@@ -76,14 +80,12 @@ def multi_pass(
     for k in range(loads.shape[-1]):
         # The first pass on the virgin terrain itself (a rut of zero depth is the same
         # law, but the virgin law may offer closed forms: Wong snow's front region).
-        ground, floor = terrain, 0.0
+        ground, floor = model, 0.0
         if k > 0:
-            ground = Rut(terrain, z_max, wheel.width, k_0, a_u)
-            floor = ground.floor_depth
-        st = solve_wheel(
-            wheel, ground, loads[..., k], slips[..., k], distribution=distribution, shear=shear
-        )
-        total = _below_surface(st.sinkage, floor, terrain)
+            rut = Rut(virgin, z_max, wheel.width, k_0, a_u)
+            ground, floor = _with_terrain(model, rut), rut.floor_depth
+        st = solve_wheel(wheel, ground, loads[..., k], slips[..., k])
+        total = _below_surface(st.sinkage, floor, virgin)
         z_max = jnp.maximum(z_max, total)
         rows.append((total, z_max, st.motion_resistance, st.drawbar_pull, st.torque, st.status))
     return PassResult(*(jnp.stack(column, axis=-1) for column in zip(*rows)))
@@ -158,6 +160,35 @@ class Ruts(eqx.Module):
         _check_modulus(self.k_0, self.a_u)
         return follows
 
+    def _overlap(self, overlap: Callable) -> Any:
+        """Each wheel's overlap with its leader's rut: `overlap(follows)`."""
+        return overlap(self.follows)
+
+    def _solve(self, contact, width, overlap, solve):
+        """The wheels solved level by level in the ruts of their leaders (`_in_tracks`;
+        the layout resolved)."""
+        return _in_tracks(self, contact, width, overlap, solve)
+
+
+class _VirginGround(eqx.Module):
+    """The ground of a vehicle without `Ruts`: every wheel on the virgin terrain.  With
+    `Ruts` (its layout resolved, `_resolved`) the two are the terrain state a vehicle's
+    wheels run on: `layout(n)`, `_overlap(overlap)` and `_solve(contact, width,
+    overlap, solve)`, where `solve(contact, take)` solves the wheels that `take`
+    selects from arrays with the wheel axis last and returns (results, sinkage)."""
+
+    def layout(self, num_wheels: int) -> tuple[int, ...]:
+        """Every wheel a leader on virgin snow."""
+        return (-1,) * num_wheels
+
+    def _overlap(self, overlap: Callable) -> Any:
+        del overlap
+        return 1.0
+
+    def _solve(self, contact, width, overlap, solve):
+        del width, overlap
+        return solve(contact, lambda x: x)[0]
+
 
 def track_offset(
     leader: Float[ArrayLike, "... 2"],
@@ -215,11 +246,11 @@ def _follower_overlap(position, velocity, yaw_rate, width, follows):
     return jnp.where(follows >= 0, _overlap(offset, width, width[lead]), 1.0)
 
 
-def _resolved(ruts, num_wheels: int):
-    """`ruts` (None or `Ruts`) with its layout for `num_wheels` wheels resolved and
-    checked, as the simulations take it."""
+def _resolved(ruts, num_wheels: int) -> Ruts | _VirginGround:
+    """The ground of the simulations' `ruts=`: `_VirginGround()` for None, or the `Ruts`
+    with its layout for `num_wheels` wheels resolved and checked."""
     if ruts is None:
-        return None
+        return _VirginGround()
     if not isinstance(ruts, Ruts):
         raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
     return Ruts(ruts.k_0, ruts.a_u, ruts.layout(num_wheels))
@@ -233,17 +264,18 @@ def _levels(follows) -> np.ndarray:
     return level
 
 
-def _in_tracks(ruts, follows, contact, width, overlap, solve):
+def _in_tracks(ruts, contact, width, overlap, solve):
     """Solve the wheels of a vehicle level by level (leaders before followers), each
-    follower on the `Rut` its leader leaves (`Ruts`).
+    follower on the `Rut` its leader leaves (`Ruts`, its layout resolved).
 
-    `solve(contact, idx)` solves the wheels `idx` (a NumPy index array into the last,
-    wheel axis) on `contact` and returns (a pytree of results with the wheel axis last,
-    their sinkage below the contact's surface).  `width` [m]: the wheels' widths,
-    broadcastable to (n,) (a rut's b_1 is its leader's); `overlap` [-]: each wheel's
-    overlap with its leader's rut, (..., n).  Returns the results of all wheels in wheel order.
+    `solve(contact, take)` solves on `contact` the wheels that `take` selects (it takes
+    an array whose last axis, the wheel axis, broadcasts to n, and returns the level's
+    wheels) and returns (a pytree of results with the wheel axis last, their sinkage
+    below the contact's surface).  `width` [m]: the wheels' widths, broadcastable to
+    (n,) (a rut's b_1 is its leader's); `overlap` [-]: each wheel's overlap with its
+    leader's rut, (..., n).  Returns the results of all wheels in wheel order.
     """
-    follows = np.asarray(follows)
+    follows = np.asarray(ruts.follows)
     n = follows.size
     level = _levels(follows)
     width = jnp.broadcast_to(jnp.asarray(width), (n,))
@@ -251,13 +283,14 @@ def _in_tracks(ruts, follows, contact, width, overlap, solve):
     parts, order = [], []
     for lv in range(level.max() + 1):
         idx = np.flatnonzero(level == lv)
+        take = partial(_take, n=n, idx=idx)
         if lv == 0:
-            result, sinkage = solve(contact, idx)
+            result, sinkage = solve(contact, take)
             total = sinkage
         else:
-            seen = overlap[..., idx] * jnp.stack([depth[j] for j in follows[idx]], -1)
+            seen = take(overlap) * jnp.stack([depth[j] for j in follows[idx]], -1)
             rut = Rut(contact.terrain, seen, width[follows[idx]], ruts.k_0, ruts.a_u)
-            result, sinkage = solve(eqx.tree_at(lambda c: c.terrain, contact, rut), idx)
+            result, sinkage = solve(eqx.tree_at(lambda c: c.terrain, contact, rut), take)
             total = jnp.maximum(_below_surface(sinkage, rut.floor_depth, contact.terrain), seen)
         for i, k in enumerate(idx):
             depth[k] = total[..., i]
@@ -265,6 +298,12 @@ def _in_tracks(ruts, follows, contact, width, overlap, solve):
         order.extend(idx)
     inverse = np.argsort(np.asarray(order))
     return jax.tree.map(lambda *xs: jnp.concatenate(xs, -1)[..., inverse], *parts)
+
+
+def _take(x, n: int, idx: np.ndarray):
+    """The wheels `idx` of `x`, whose last axis (the wheel axis) broadcasts to n."""
+    x = jnp.asarray(x)
+    return jnp.broadcast_to(x, jnp.broadcast_shapes(x.shape, (n,)))[..., idx]
 
 
 class PathResult(eqx.Module):
@@ -286,9 +325,10 @@ class PathResult(eqx.Module):
     rut_map: RutMap
 
 
+@_takes_model(positional=7)
 def drive_path(
     wheel: AbstractWheel,
-    terrain: AbstractTerrain,
+    terrain: AbstractTerrain | ContactModel,
     rut_map: RutMap,
     positions: Float[ArrayLike, "steps n 2"],
     headings: Float[ArrayLike, "steps n"],
@@ -296,8 +336,6 @@ def drive_path(
     slip: Float[ArrayLike, "*steps n"],
     *,
     lookahead: float | None = None,
-    distribution=None,
-    shear: ShearModel | AbstractShearLaw = "classic",
 ) -> PathResult:
     """n wheels driven along prescribed paths over a `RutMap` (a test rig, a kinematic
     vehicle, a convoy), each step: read the rut ahead of every wheel, solve its
@@ -309,7 +347,8 @@ def drive_path(
     **Arguments:**
 
     - `wheel`, `terrain`: every wheel's (`RigidWheel`, `DeflectingTire`, ...) and the
-      virgin terrain (any law).
+      virgin terrain (any law), or a `ContactModel` of it (its shear law, distribution,
+      nodes per panel and force terms act on every `Rut` read from the map).
     - `rut_map`: the map before the first step (`RutMap.empty`, or an earlier result's).
     - `positions`: each wheel's centre (x, y) [m] at every step, (steps, n, 2); the
       first row only places the wheels (nothing is marked before it).
@@ -317,7 +356,6 @@ def drive_path(
     - `loads`: F_z [N] and `slip`: driving slip [-], (n,) or (steps, n).
     - `lookahead`: how far ahead of the axle the rut is read [m] (default the wheel's
       radius, the farthest the contact can reach).
-    - `distribution`, `shear`: as in `solve_wheel`.
 
     **Returns:** `PathResult`.
 
@@ -332,15 +370,12 @@ def drive_path(
         lookahead = float(np.max(np.asarray(wheel.diameter))) / 2
     if lookahead is not None and not _is_traced(lookahead):
         rut_map.check_lookahead(lookahead)
-    return _drive_path(
-        wheel, terrain, rut_map, positions, headings, loads, slip, lookahead, distribution, shear
-    )
+    return _drive_path(wheel, terrain, rut_map, positions, headings, loads, slip, lookahead)
 
 
 @eqx.filter_jit
-def _drive_path(
-    wheel, terrain, rut_map, positions, headings, loads, slip, lookahead, distribution, shear
-):
+def _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahead):
+    terrain = _unpack_model(model)[0]
     positions = jnp.asarray(positions, float)
     steps, n = positions.shape[:2]
     headings = jnp.broadcast_to(jnp.asarray(headings, positions.dtype), (steps, n))
@@ -354,9 +389,7 @@ def _drive_path(
         position, heading, load, s = row
         seen = grid.read(position, heading, width, ahead)
         rut = Rut(terrain, seen, width, grid.k_0, grid.a_u)
-        st = solve_wheel(
-            wheel, rut, load, s, distribution=distribution, shear=shear, initial_entry_angle=hint
-        )
+        st = solve_wheel(wheel, _with_terrain(model, rut), load, s, initial_entry_angle=hint)
         total = jnp.maximum(_below_surface(st.sinkage, rut.floor_depth, terrain), seen)
         grid = grid.mark(previous, position, width, total)
         hint = jax.lax.stop_gradient(jnp.where(jnp.isfinite(st.entry_angle), st.entry_angle, hint))

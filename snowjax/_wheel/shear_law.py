@@ -155,23 +155,6 @@ class AbstractShearLaw(eqx.Module):
         scale = jnp.where(has_root, split_scale, jnp.inf)
         return split / 2, split, b3, scale, scale, 2 * entry_scale
 
-    def nodes(self, nodes_per_panel: int | None, closed_form: bool) -> tuple:
-        """Nodes of the rule (without braking, with braking), indexed by `braking`.
-
-        `closed_form`: nodes per panel of the two-panel rule, and of each panel of the
-        four-panel rule; otherwise nodes per half-panel of the any-terrain rule.
-        `nodes_per_panel` None: the law's defaults.
-        """
-        if nodes_per_panel is None:
-            nodes = self.nodes_closed_form if closed_form else self.nodes_any_terrain
-            if nodes is None:
-                raise ValueError(f"the shear law {type(self).__name__} has no any-terrain rule")
-            return nodes
-        n = int(nodes_per_panel)
-        if n < 2:
-            raise ValueError(f"nodes_per_panel must be >= 2, got {n}")
-        return (n, (n, n, n, n)) if closed_form else (n, n)
-
 
 class JanosiHanamoto(AbstractShearLaw):
     """Janosi–Hanamoto on the rigid-wheel shear displacement, eq. (4.11) (`"classic"`):
