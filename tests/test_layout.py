@@ -206,3 +206,15 @@ def test_no_public_function_takes_over_10_parameters():
         if len(parameters) > 10:
             wide.append(f"{label}: {len(parameters)} parameters")
     assert not wide, wide
+
+
+def test_the_contact_has_few_optional_branches():
+    """The contact's optional parts are modules (the wheel's contact, the running
+    `Straight` / `SlipAngle`, the force terms, the ground), not `None` branches: at most
+    30 `is None` / `is not None` in `snowjax/_wheel` and `snowjax/_terrain` together
+    (docstrings and comments included; 80 before the contact became modules)."""
+    count = 0
+    for part in ("_wheel", "_terrain"):
+        for path in sorted((PKG / part).rglob("*.py")):
+            count += len(re.findall(r"\bis (?:not )?None\b", path.read_text()))
+    assert 0 < count <= 30, count

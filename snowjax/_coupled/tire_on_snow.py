@@ -31,9 +31,10 @@ from .._tire.tire import (
     _forces,
     tire_parameters,
 )
-from .._wheel.equilibrium import MAX_SLIP_ANGLE, Status, WheelState, solve_wheel
+from .._wheel.equilibrium import Status, WheelState, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.running import MAX_SLIP_ANGLE
 from .._wheel.shear_law import _shear_law
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]

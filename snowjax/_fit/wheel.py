@@ -34,7 +34,7 @@ from .._leaves import (
 )
 from .._terrain.base import Terrain, _terrain_parameter_infos
 from .._terrain.wong import WongSnow
-from .._wheel.distribution import FrontRegion
+from .._wheel.distribution import FrontRegion, _as_distribution
 from .._wheel.equilibrium import Status, solve_wheel
 from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _check_model
@@ -372,7 +372,7 @@ def _check_solvable(wheel, snow, distribution, ld, sl, shear) -> None:
     with np.errstate(invalid="ignore", over="ignore"):
         rules = _wheel_checks(
             jax.tree_util.tree_map(to_np, wheel), jax.tree_util.tree_map(to_np, snow),
-            None if distribution is None else jax.tree_util.tree_map(to_np, distribution),
+            jax.tree_util.tree_map(to_np, _as_distribution(distribution)),
             ld, sl, shear,
         )  # fmt: skip
     for rule, value, ok, allowed in rules:

@@ -30,6 +30,7 @@ from .geometry import (
     shear_displacement,
 )
 from .model import ContactModel, _takes_model, _unpack_model
+from .running import _STRAIGHT
 from .shear_law import AbstractShearLaw, ShearModel, _shear_law
 
 # --------------------------------------------------------------------------------------
@@ -187,8 +188,8 @@ def contact_forces(
 
     _check_model(wheel, snow, distribution, law)
     distribution = _as_distribution(distribution)
-    rule = _contact_rule(snow, distribution, wheel, straight=True)
-    n = rule.nodes(law, nodes_per_panel)
+    rule = _contact_rule(snow, distribution, wheel, _STRAIGHT)
+    n = type(rule).nodes(rule, law, nodes_per_panel)  # unbound: see `solve_wheel`
     return _contact_forces_jit(
         wheel, snow, distribution, terms, entry_angle, slip, law, n, _layout(slip), rule
     )
@@ -200,21 +201,21 @@ def _contact_batch(
     wheel,
     terrain,
     distribution,
-    side,
+    running,
     terms,
     *,
     shear,
     n,
     braking,
     rule,
-    bulldozing=False,
     vertical_only=False,
     bottomed=None,
     moving_rule=False,
 ):
     """Contact integrals of a flat batch (1-D leaves): W alone with `vertical_only`, else
-    (W, R, T, M, F_y, M_z) (F_y = M_z = 0 without a slip angle, `side` None, unless a
-    term gives them); `terms` the model's own force terms (a tuple, leaves 1-D).
+    (W, R, T, M, F_y, M_z) (F_y = M_z = 0 running `Straight()`, unless a term gives
+    them); `running` (`running.py`) and `terms`, the model's own force terms (a tuple),
+    with 1-D leaves.
 
     The one entry to the quadrature, for the solver and `contact_forces`: every element
     by the contact `rule` (`rules.AbstractContactRule`, chosen by
@@ -222,14 +223,13 @@ def _contact_batch(
     closed-form rule (the any-terrain rule's nodes move with theta0 by construction).
     """
 
-    def one(th, i, wh, tr, ds, sd, tm, bt):
+    def one(th, i, wh, tr, ds, rn, tm, bt):
         contact = type(wh).contact(wh, th, tr)
         return rule.contact(
-            contact, i, tr, ds, shear, n, braking, vertical_only, sd, bulldozing, tm, bt,
-            moving_rule,
-        )  # fmt: skip
+            contact, i, tr, ds, shear, n, rn, braking, vertical_only, tm, bt, moving_rule
+        )
 
-    return jax.vmap(one)(theta0, slip, wheel, terrain, distribution, side, terms, bottomed)
+    return jax.vmap(one)(theta0, slip, wheel, terrain, distribution, running, terms, bottomed)
 
 
 def _layout(slip, warm_start: bool = False) -> str:
@@ -286,7 +286,7 @@ def _contact_forces_jit(
             wheel,
             terrain,
             distribution,
-            None,
+            _STRAIGHT,
             terms,
             shear=shear,
             n=n[braking],

@@ -190,7 +190,9 @@ def _one_minus_exp_jvp(primals, tangents):
 
 def _normalized_displacement(theta, slip, k):
     """J = j / D = ½[(θ0 - θ) - (1 - i)(sin θ0 - sin θ)], eq. (4.10) / D."""
-    return _shear_displacement(theta, k.entry_angle, slip, 0.5)
+    return _shear_displacement(
+        theta, k.entry_angle, slip, 0.5, jnp.sin(theta), jnp.sin(k.entry_angle)
+    )
 
 
 def classic_normalized_shear(

@@ -94,9 +94,10 @@ class FrontRegion(AbstractStressDistribution):
 _FRONT_REGION = FrontRegion()
 
 
-def _is_front(distribution) -> bool:
-    """Whether the distribution is the thesis's front region (`None` or `FrontRegion()`)."""
-    return distribution is None or isinstance(distribution, FrontRegion)
+def _is_front(distribution: AbstractStressDistribution) -> bool:
+    """Whether the distribution is the thesis's front region (`FrontRegion()`; the
+    functions that accept None for it convert it first, `_as_distribution`)."""
+    return isinstance(distribution, FrontRegion)
 
 
 def _as_distribution(distribution) -> AbstractStressDistribution:

@@ -56,6 +56,7 @@ from .inputs import (
 from .lateral import Lateral
 from .model import ContactModel, _takes_model, _unpack_model
 from .root import _implicit_root, _root_outputs
+from .running import _STRAIGHT, AbstractRunning, SlipAngle
 from .shear_law import _shear_law
 from .start import _balance_residual, _theta_from_s
 from .status import Status, _throw_on_failure
@@ -66,9 +67,6 @@ __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 # The rim geometry (4.5)-(4.8) and the simplified model's tau2 = 1/cos(theta0) - 1 need
 # theta0 below 90 degrees; the solver stops at 85 degrees (z0 = 0.46 D).
 MAX_ENTRY_ANGLE = float(np.deg2rad(85.0))
-# Slip angles are accepted up to (not including) 90 degrees, where the side-slip of a
-# wheel that keeps its driving slip i < 1 would need an infinite travel speed.
-MAX_SLIP_ANGLE = float(np.pi / 2)
 
 
 class WheelState(eqx.Module):
@@ -135,7 +133,7 @@ def _entry_angle_cap(depth, diameter):
 
 
 def _solve_layout(
-    wheel, terrain, distribution, load, slip, guess, side, terms, *, options, braking, bulldozing
+    wheel, terrain, distribution, load, slip, guess, running, terms, *, options, braking
 ):
     """Equilibrium of a flat batch (every leaf of shape (B,)) with one quadrature layout.
 
@@ -148,15 +146,15 @@ def _solve_layout(
     deep end, W < target at the shallow one; W need not be monotone in between (a braked
     wheel's backward shear pulls it down; a layered snow's crust breaks).
 
-    `side` is None or `(tan beta, K_y, gamma)` per element (`general_contact`); `terms`
-    the model's own force terms (leaves per element).
+    `running` (`running.py`: straight or a slip angle) and `terms`, the model's own force
+    terms, have leaves per element.
     Returns (theta0, R, T, M, F_y, M_z, status).
     """
     shear, n, max_steps, rule = options
     # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
     # the solve runs on stopped copies of the inputs.
-    differentiable = (wheel, terrain, distribution, load, slip, side, terms)
-    wheel, terrain, distribution, load, slip, side, terms = jax.lax.stop_gradient(differentiable)
+    differentiable = (wheel, terrain, distribution, load, slip, running, terms)
+    wheel, terrain, distribution, load, slip, running, terms = jax.lax.stop_gradient(differentiable)
     tol = _tolerance(load.dtype)
     reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap, reaches_base = _entry_angle_cap(reach, wheel.diameter)
@@ -166,18 +164,19 @@ def _solve_layout(
         n=n,
         braking=braking,
         rule=rule,
-        bulldozing=bulldozing,
     )
 
     def vertical(theta0) -> Array:  # W of every element
         return cast(
             Array,
-            contact(theta0, slip, wheel, terrain, distribution, side, terms, vertical_only=True),
+            contact(theta0, slip, wheel, terrain, distribution, running, terms, vertical_only=True),
         )
 
-    over, target, lower, upper, s0 = rule.start(
-        vertical, theta_cap, load, slip, guess, wheel, terrain, shear
-    )
+    if guess is None:
+        start = rule.start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+    else:
+        start = rule.warm_start(vertical, theta_cap, load, slip, guess, wheel, terrain)
+    over, target, lower, upper, s0 = start
 
     # An element the layer cannot carry is held at the cap (`forces`): its residual is 0,
     # so it leaves the batch's Newton iteration at once (a layer that carries nothing,
@@ -194,7 +193,7 @@ def _solve_layout(
         jnp.clip(s0, lower, upper),
         lower,
         upper,
-        (theta_cap, target, over, slip, wheel, terrain, distribution, side, terms),
+        (theta_cap, target, over, slip, wheel, terrain, distribution, running, terms),
         tol,
         max_steps,
     )
@@ -208,13 +207,13 @@ def _solve_layout(
 
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
-    wheel, terrain, distribution, load, slip, side, terms = differentiable
+    wheel, terrain, distribution, load, slip, running, terms = differentiable
     reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap = _entry_angle_cap(reach, wheel.diameter)[0]
     root = (
         (over, over & reaches_base),
         load,
-        (theta_cap, slip, wheel, terrain, distribution, side, terms),
+        (theta_cap, slip, wheel, terrain, distribution, running, terms),
     )
     s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
     theta0, w, r, t, m, fy, mz = _root_outputs(s, *root, forces=forces)
@@ -261,67 +260,39 @@ def _in_chunks(fn, args, size):
     return jax.tree_util.tree_map(lambda x: x.reshape(-1)[:size], out)
 
 
-def _side_rules(slip_angle, lateral):
-    """Validity rules of the slip angle and the `Lateral` leaves (empty without them)."""
-    if slip_angle is None:
-        return []
-    ok = jnp.abs(slip_angle) < MAX_SLIP_ANGLE
-    rules = [("slip_angle", slip_angle, ok, "in (-pi/2, pi/2) rad")]
-    return rules + Lateral.constraints(lateral)
-
-
-def _side(valid, slip_angle, lateral):
-    """(side, bulldozing): `(tan beta, K_y, gamma)` per element (None without a slip
-    angle), invalid elements replaced by a valid reference."""
-    if slip_angle is None:
-        return None, False
-    pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
-    reference = Lateral(
-        shear_modulus=None if lateral.shear_modulus is None else 0.02,
-        unit_weight=0.0,
-        bulldozing=lateral.bulldozing,
-    )
-    lateral = jax.tree_util.tree_map(pick, lateral, reference)
-    side = (jnp.tan(pick(slip_angle, 0.0)), lateral.shear_modulus, lateral.unit_weight)
-    return side, lateral.bulldozing
-
-
 @eqx.filter_jit
-def _solve_jit(
-    wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral, options, layout
-):
+def _solve_jit(wheel, terrain, distribution, terms, load, slip, guess, running, options, layout):
     """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
 
-    `options` = (shear law, nodes, max_steps, contact rule), static; `layout` "driving",
-    "braking" or "auto" (`_with_rule_for`).
+    `running` is `Straight()` or a `SlipAngle` (`running.py`); `options` = (shear law,
+    nodes, max_steps, the contact rule's class), static; `layout` "driving", "braking" or
+    "auto" (`_with_rule_for`).
     """
-    shear, n, max_steps, rule = options
-    trees = (wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral)
+    shear, n, max_steps, rule_type = options
+    rule = rule_type()
+    trees = (wheel, terrain, distribution, terms, load, slip, guess, running)
     shape, dtype, trees = _broadcast_leaves(*trees)
-    wheel, terrain, distribution, terms, load, slip, guess, slip_angle, lateral = trees
+    wheel, terrain, distribution, terms, load, slip, guess, running = trees
     valid = _valid_mask(wheel, terrain, distribution, load, slip, shear)
     small, large = _magnitude_window(dtype)
-    for name, value, ok, _ in _side_rules(slip_angle, lateral) + _term_rules(terms):
+    for name, value, ok, _ in type(running).rules(running) + _term_rules(terms):
         valid &= jnp.isfinite(value) & ok & _fits(value, name, small, large)
     wheel, terrain, distribution, terms, load, slip = _safe_inputs(
         valid, wheel, terrain, distribution, terms, load, slip
     )
     slip = rule.prepare_slip(slip)
-    side, bulldozing = _side(valid, slip_angle, lateral)
+    running = type(running).safe(running, valid)
 
     def solve(ops):
         def layout_solve(braking):
             return _solve_layout(
-                *ops,
-                options=(shear, n[braking], max_steps, rule),
-                braking=braking,
-                bulldozing=bulldozing,
+                *ops, options=(shear, n[braking], max_steps, rule), braking=braking
             )
 
         return _with_rule_for(ops[4], shear, layout_solve, layout)
 
     theta0, r, t, m, fy, mz, status = _in_chunks(
-        solve, (wheel, terrain, distribution, load, slip, guess, side, terms), load.shape[0]
+        solve, (wheel, terrain, distribution, load, slip, guess, running, terms), load.shape[0]
     )
     nan = jnp.asarray(jnp.nan, dtype)
     out = lambda x: jnp.where(valid, x, nan).reshape(shape)  # noqa: E731
@@ -466,29 +437,25 @@ def solve_wheel(
     slip = _numeric_argument("slip", slip)
     if initial_entry_angle is not None:
         initial_entry_angle = _numeric_argument("initial_entry_angle", initial_entry_angle)
+    running: AbstractRunning = _STRAIGHT
     if slip_angle is not None:
         slip_angle = _numeric_argument("slip_angle", slip_angle)
+        running = SlipAngle(slip_angle, Lateral() if lateral is None else lateral)
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
             # Straight running: the solver paths without a slip angle, at the broadcast shape.
             shape = _broadcast_shape(
-                wheel, terrain, distribution, load, slip, initial_entry_angle, slip_angle,
-                terms=terms,
-            )  # fmt: skip
+                wheel, terrain, distribution, load, slip, initial_entry_angle, running, terms
+            )
             broadcast = np.broadcast_to if not _is_traced(load) else jnp.broadcast_to
             load = broadcast(load, shape)
-            slip_angle = None
-    if slip_angle is None:
-        lateral = None  # used only with a slip angle
-    else:
-        lateral = Lateral() if lateral is None else lateral
-        if not shear.lateral:
-            raise ValueError(
-                f"shear={shear.name!r} ({type(shear).__name__}) has no lateral counterpart: "
-                "use ContactModel(terrain, shear='classic') (or 'none') with a slip_angle."
-            )
-    side_trees = (slip_angle, lateral)  # both None without a slip angle
+            running = _STRAIGHT
+    if not (running.straight or shear.lateral):
+        raise ValueError(
+            f"shear={shear.name!r} ({type(shear).__name__}) has no lateral counterpart: "
+            "use ContactModel(terrain, shear='classic') (or 'none') with a slip_angle."
+        )
     shape = _broadcast_shape(
-        wheel, terrain, distribution, load, slip, initial_entry_angle, *side_trees, terms=terms
+        wheel, terrain, distribution, load, slip, initial_entry_angle, running, terms
     )
     if math.prod(shape) == 0:  # an empty batch: empty results, nothing to solve
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
@@ -497,14 +464,20 @@ def solve_wheel(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
     _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
-    if slip_angle is not None or terms:
-        dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
+    if not running.straight or terms:
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
-        rules = _side_rules(*jax.tree_util.tree_map(concrete, side_trees))
+        concrete_running = jax.tree_util.tree_map(concrete, running)
+        rules = type(running).rules(concrete_running)  # unbound: see below
         rules += _term_rules(jax.tree_util.tree_map(concrete, terms))
+        dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         _check_rules(rules, dtype, *_magnitude_window(dtype))
-    rule = _contact_rule(terrain, distribution, wheel, straight=slip_angle is None)
-    options = (shear, rule.nodes(shear, nodes_per_panel), int(max_steps), rule)
+    rule = _contact_rule(terrain, distribution, wheel, running)
+    # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
+    # every eager call.
+    # The rule travels as its class: a module among the static arguments costs the
+    # compiled function's dispatch ~5 us per call (flattened and hashed).
+    nodes = type(rule).nodes(rule, shear, nodes_per_panel)
+    options = (shear, nodes, int(max_steps), type(rule))
     layout = _layout(slip, warm_start=rule.warm_layout and initial_entry_angle is not None)
     state = _solve_jit(
         wheel,
@@ -514,8 +487,7 @@ def solve_wheel(
         load,
         slip,
         initial_entry_angle,
-        slip_angle,
-        lateral,
+        running,
         options,
         layout,
     )

@@ -134,7 +134,7 @@ def _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance):
     modulus = terrain.shear_modulus
 
     def along_rim(theta):
-        j = _shear_displacement(theta, theta0, slip, diameter / 2, jnp.sin(theta))
+        j = _shear_displacement(theta, theta0, slip, diameter / 2, jnp.sin(theta), jnp.sin(theta0))
         return law.mobilisation(j, modulus, sigma0, theta0, slip, diameter, terrain)
 
     zero = jnp.zeros_like(theta0)
@@ -184,7 +184,7 @@ def _closed_form_contact(
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
     sigma = terrain.pressure_at_clearance(clearance + diameter * half_sin**2, width)
-    j = _shear_displacement(theta, theta0, slip, r, sin)
+    j = _shear_displacement(theta, theta0, slip, r, sin, jnp.sin(theta0))
     if law.mobilises:
         g = law.mobilisation(j, terrain.shear_modulus, sigma, theta0, slip, diameter, terrain)
         tau = (terrain.cohesion + sigma * terrain.tan_phi) * g
@@ -254,23 +254,18 @@ def _initial_guess(theta_cap, load, diameter, width, terrain, stiffness):
     return jax.lax.stop_gradient(_newton_s(residual, jnp.clip(s, s_min, S_MAX), 3))
 
 
-def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shear):
-    """(over, target, lower, upper, s0) from the closed-form no-shear load (a terrain
-    with `front_rim_integrals` on the front region).
+def _closed_form_bracket(vertical, theta_cap, load, slip, wheel, snow):
+    """(over, target, lower, upper) from the closed-form no-shear load (a terrain with
+    `front_rim_integrals` on the front region), for either start.
 
     The capacity of the layer is W at s_min.  For slip >= 0 the shear stress only adds to
     W, so loads below the closed-form no-shear capacity are known to be carried and the
     quadrature is only needed if some element brakes or is heavier than that (a
-    `lax.cond` that costs nothing when not needed).  The start is the closed-form
-    no-shear balance, corrected once by the shear stress's share of W (one quadrature
-    at the no-shear guess gives W / W_no_shear, and the closed form is re-solved for
-    load / factor: the guess's error falls from ~4 % to ~0.3 %, one Newton step fewer),
-    or the warm start.
+    `lax.cond` that costs nothing when not needed).
     """
-    diameter, width = wheel.diameter, wheel.width
     s_min = jnp.full_like(load, _s_min(load.dtype))
     theta_top = _theta_from_s(s_min, theta_cap)
-    no_shear_capacity = _no_shear_load(theta_top, diameter, width, snow)
+    no_shear_capacity = _no_shear_load(theta_top, wheel.diameter, wheel.width, snow)
     surely_carried = (no_shear_capacity > load * (1 + 1e-6)) & (slip >= 0)
     capacity = jax.lax.cond(
         jnp.all(surely_carried), lambda: jnp.full_like(load, jnp.inf), lambda: vertical(theta_top)
@@ -279,18 +274,26 @@ def _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, snow, shea
     # Elements that cannot be balanced are solved for half their capacity (any solvable
     # target would do) so that the batch's Newton iteration terminates quickly.
     target = jnp.where(over, 0.5 * capacity, load)
-    if guess is not None:
-        s0 = _warm_start(guess, theta_cap)
-    else:
-        stiffness = _surface_stiffness(snow, width, load)
-        s0 = _initial_guess(theta_cap, target, diameter, width, snow, stiffness)
-        if shear.mobilises:
-            theta_g = _theta_from_s(s0, theta_cap)
-            w_ns = _no_shear_load(theta_g, diameter, width, snow)
-            factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
-            factor = jax.lax.stop_gradient(factor)
-            s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow, stiffness)
-    return over, target, s_min, jnp.full_like(load, S_MAX), s0
+    return over, target, s_min, jnp.full_like(load, S_MAX)
+
+
+def _closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
+    """(over, target, lower, upper, s0) of a cold start (`_closed_form_bracket`): the
+    closed-form no-shear balance, corrected once by the shear stress's share of W (one
+    quadrature at the no-shear guess gives W / W_no_shear, and the closed form is
+    re-solved for load / factor: the guess's error falls from ~4 % to ~0.3 %, one Newton
+    step fewer)."""
+    diameter, width = wheel.diameter, wheel.width
+    over, target, lower, upper = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, snow)
+    stiffness = _surface_stiffness(snow, width, load)
+    s0 = _initial_guess(theta_cap, target, diameter, width, snow, stiffness)
+    if shear.mobilises:
+        theta_g = _theta_from_s(s0, theta_cap)
+        w_ns = _no_shear_load(theta_g, diameter, width, snow)
+        factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
+        factor = jax.lax.stop_gradient(factor)
+        s0 = _initial_guess(theta_cap, target / factor, diameter, width, snow, stiffness)
+    return over, target, lower, upper, s0
 
 
 def _flush_tiny_slip(slip):
@@ -310,34 +313,39 @@ class FrontRimRule(AbstractContactRule):
 
     warm_layout: ClassVar[bool] = True
 
-    def nodes(self, law, nodes_per_panel) -> tuple:
+    def law_nodes(self, law) -> tuple:
         """Nodes of the two-panel rule and of each panel of the four-panel rule: the
-        law's `nodes_closed_form`, or `nodes_per_panel` for all."""
-        if nodes_per_panel is None:
-            return law.nodes_closed_form
-        return (nodes_per_panel, (nodes_per_panel,) * 4)
+        law's `nodes_closed_form`."""
+        return law.nodes_closed_form
+
+    def uniform_nodes(self, n: int) -> tuple:
+        return (n, (n,) * 4)
 
     def prepare_slip(self, slip):
         return _flush_tiny_slip(slip)
 
-    def start(self, vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
-        return _closed_form_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear)
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
+        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
+        bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
+        return *bracket, _warm_start(guess, theta_cap)
 
     def contact(
-        self, contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
-        bulldozing, terms, bottomed, moving_rule,
+        self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
+        terms, bottomed, moving_rule,
     ):  # fmt: skip
-        del distribution, side, bulldozing  # the front region, running straight
+        del distribution, running  # the front region, running straight
         return _closed_form_contact(
             contact, slip, terrain, law, n, bottomed, braking, vertical_only, moving_rule, terms
         )
 
 
-def _contact_rule(terrain, distribution, wheel, straight: bool) -> AbstractContactRule:
+def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:
     """The contact rule of a combination: `FrontRimRule` where the terrain offers closed
     forms of its rim integrals, on the front region of a rigid rim running straight
-    (`_closed_form_rule`), else `AnyTerrainRule`."""
-    if straight and _closed_form_rule(terrain, distribution, wheel):
+    (`running.straight`, `_closed_form_rule`), else `AnyTerrainRule`."""
+    if running.straight and _closed_form_rule(terrain, distribution, wheel):
         return _FRONT_RIM_RULE
     return _ANY_TERRAIN_RULE
 

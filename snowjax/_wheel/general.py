@@ -44,18 +44,11 @@ from .geometry import (
     _layer_width,
     _rim_sinkage_between,
     _shear_displacement,
-    _shear_displacement_slope,
     _sincos_half,
 )
 from .rules import AbstractContactRule
-from .start import _scan_start
-from .terms import (
-    ContactNodes,
-    FlexingResistance,
-    SidewallBulldozing,
-    TerrainStresses,
-    _total,
-)
+from .start import _scan_start, _warm_bracket_start
+from .terms import ContactNodes, _total
 
 GRADING_POWER = 2
 # The power of the node map at a log-singular end (`_graded_half_panels`), and the share of
@@ -216,8 +209,8 @@ def _braking_point(theta_r, slip, contact, terrain, distribution):
 
 
 def general_contact(
-    contact, slip, terrain, distribution, law, n, braking=True, vertical_only=False, side=None,
-    bulldozing=False, terms=(),
+    contact, slip, terrain, distribution, law, n, running, braking=True, vertical_only=False,
+    terms=(),
 ):  # fmt: skip
     """(W, R, T, M, F_y, M_z) of one wheel's `contact` (`AbstractContact`, scalar inputs)
     on any terrain; W alone if `vertical_only`.
@@ -228,15 +221,15 @@ def general_contact(
     `braking=False` is valid only for slip >= 0 (no sign change of the shear
     displacement).
 
-    `side` is None (straight running) or `(tan(beta), K_y, gamma)` of a wheel under slip
-    angle beta (`lateral.py`; K_y None: the terrain's modulus); then the shear stress is
-    the combined law, F_y the lateral force [N] and M_z the moment about the vertical
-    through the wheel centre [N m], with the sidewall bulldozing resistance if
-    `bulldozing` (F_y = M_z = 0 running straight, unless a term of `terms` gives them).
+    `running` (`running.py`) is `Straight()` or `SlipAngle(beta, lateral)`: under a slip
+    angle the shear stress is the combined law, F_y the lateral force [N] and M_z the
+    moment about the vertical through the wheel centre [N m], with the sidewall
+    bulldozing resistance if `lateral.bulldozing` (F_y = M_z = 0 running straight, unless
+    a term of `terms` gives them).
 
-    The stresses and forces are force terms (`terms.py`): the built-in ones (`_terms`)
-    and the model's own `terms` (`AbstractForceTerm`s), each given the nodes
-    (`ContactNodes`) and summed.
+    The stresses and forces are force terms (`terms.py`): the built-in ones of the
+    running (`running.terms(law)`) and the model's own `terms` (`AbstractForceTerm`s),
+    each given the nodes (`ContactNodes`) and summed.
 
     The contact gives the geometry at every node (`contact.points`: the normal's
     direction, the length element, the width, the shortening of the shear displacement;
@@ -252,18 +245,7 @@ def general_contact(
     theta_r = distribution.exit_angle(theta0, slip)
     surface = jnp.zeros_like(theta0)
     k_surface = terrain.rim_properties(surface, type(wheel).contact_width(wheel, surface))[3]
-    if side is None:
-        entry_scale = law.entry_layer(theta0, slip, diameter, terrain, k_surface)
-    elif not law.mobilises:
-        entry_scale = inf
-    else:
-        # Width of the layer where the resultant displacement u rises to ~1.
-        tan_beta, k_lateral, _ = side
-        k_y = k_surface if k_lateral is None else k_lateral
-        entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
-        rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * tan_beta / k_y)
-        entry_scale = 1 / (r * jnp.maximum(rate, 1e-12 / k_surface))
-
+    entry_scale = running.entry_scale(law, theta0, slip, diameter, terrain, k_surface)
     points = [(theta_r, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     points += [(angle, inf) for angle in contact.panel_ends(distribution, slip)]
@@ -303,7 +285,7 @@ def general_contact(
         contact=contact,
         terrain=terrain,
         slip=slip,
-        tan_slip_angle=0.0 if side is None else side[0],
+        tan_slip_angle=running.tan_slip_angle(),
         theta=theta,
         weight=weight,
         sin=sin,
@@ -315,20 +297,11 @@ def general_contact(
         modulus=modulus,
         # The rim's travel from the entry less the ground's (4.10), less what the
         # contact's shape takes from it (a tyre's flat).
-        shear_displacement=_shear_displacement(theta, theta0, slip, r, sin) - r * at.shortening,
+        shear_displacement=_shear_displacement(theta, theta0, slip, r, sin, jnp.sin(theta0))
+        - r * at.shortening,
     )
-    total = _total(_terms(law, side, bulldozing) + tuple(terms), nodes)
+    total = _total(running.terms(law) + tuple(terms), nodes)
     return total.vertical_load if vertical_only else total.astuple()
-
-
-def _terms(law, side, bulldozing) -> tuple:
-    """The built-in force terms: the terrain's normal and shear stresses (straight, or
-    combined with the lateral shear under a slip angle), the sidewall bulldozing and the
-    wheel's flexing resistance."""
-    if side is None:
-        return (TerrainStresses(law), FlexingResistance())
-    terms = (TerrainStresses(law, side[1], combined=True), FlexingResistance())
-    return terms + ((SidewallBulldozing(side[2]),) if bulldozing else ())
 
 
 class AnyTerrainRule(AbstractContactRule):
@@ -337,24 +310,28 @@ class AnyTerrainRule(AbstractContactRule):
 
     warm_layout: ClassVar[bool] = False
 
-    def nodes(self, law, nodes_per_panel) -> tuple:
-        """Nodes per half-panel without and with braking: the law's `nodes_any_terrain`,
-        or `nodes_per_panel` for both."""
-        if nodes_per_panel is not None:
-            return (nodes_per_panel, nodes_per_panel)
+    def law_nodes(self, law) -> tuple:
+        """Nodes per half-panel without and with braking: the law's `nodes_any_terrain`."""
         if law.nodes_any_terrain is None:
             raise ValueError(f"the shear law {type(law).__name__} has no any-terrain rule")
         return law.nodes_any_terrain
 
-    def start(self, vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
-        return _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear)
+    def uniform_nodes(self, n: int) -> tuple:
+        return (n, n)
+
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
+        del slip, wheel, shear
+        return _scan_start(vertical, theta_cap, load, terrain)
+
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
+        del slip, wheel, terrain
+        return _warm_bracket_start(vertical, theta_cap, load, guess)
 
     def contact(
-        self, contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
-        bulldozing, terms, bottomed, moving_rule,
+        self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
+        terms, bottomed, moving_rule,
     ):  # fmt: skip
         del bottomed, moving_rule  # its nodes move with theta0 by construction
         return general_contact(
-            contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
-            bulldozing, terms,
-        )  # fmt: skip
+            contact, slip, terrain, distribution, law, n, running, braking, vertical_only, terms
+        )

@@ -208,17 +208,21 @@ def shear_displacement(
     **Arguments:** `theta` [rad], `entry_angle` theta0 [rad], `slip` i [-] (driving slip,
     eq. 2.6; negative when braking), `diameter` D [m].  **Returns:** j [m].
     """
+    theta, entry_angle = jnp.asarray(theta), jnp.asarray(entry_angle)
     return _shear_displacement(
-        jnp.asarray(theta), jnp.asarray(entry_angle), jnp.asarray(slip), jnp.asarray(diameter) / 2
+        theta,
+        entry_angle,
+        jnp.asarray(slip),
+        jnp.asarray(diameter) / 2,
+        jnp.sin(theta),
+        jnp.sin(entry_angle),
     )
 
 
-def _shear_displacement(theta, theta0, slip, radius, sin_theta=None, sin_theta0=None):
+def _shear_displacement(theta, theta0, slip, radius, sin_theta, sin_theta0):
     """Eq. (4.10), `j = r [(theta0 - theta) - (1 - i)(sin theta0 - sin theta)]` [m] (the
-    one implementation; `radius` 1 gives j / r).  The sines may be passed in when the
-    caller has them (the quadrature's from `_sincos_half`)."""
-    sin_theta = jnp.sin(theta) if sin_theta is None else sin_theta
-    sin_theta0 = jnp.sin(theta0) if sin_theta0 is None else sin_theta0
+    one implementation; `radius` 1 gives j / r), given the sines of theta and theta0
+    (the quadrature's from `_sincos_half`)."""
     return radius * ((theta0 - theta) - (1 - slip) * (sin_theta0 - sin_theta))
 
 
@@ -233,7 +237,7 @@ def _layer_width(modulus, radius, slope):
     return modulus / (radius * jnp.maximum(jnp.abs(slope), 1e-12))
 
 
-def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
+def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset: ArrayLike = 0.0):
     """Where the shear displacement (4.10) of a braked wheel changes sign inside the
     contact theta_r..theta0 (`theta_r` None: 0, the front region): (angle, has_root,
     theta_star).
@@ -244,16 +248,15 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
     lo = max(theta_r, -theta_star).  Newton from lo converges monotonically from the
     left, kept in [lo, theta_star].  Where there is no root, `angle` is the last iterate
     (unused).  `taylor`: the iteration's sine and cosine from the half-angle Taylor
-    polynomials (faster to run, more code to compile) or XLA's.  `offset` (None: 0): the
-    root of f - offset instead (a deflecting tyre's rear arc, whose travel the flat
+    polynomials (faster to run, more code to compile) or XLA's.  `offset` (default 0):
+    the root of f - offset instead (a deflecting tyre's rear arc, whose travel the flat
     shortened).
     """
     sin_theta0 = jnp.sin(theta0)
     theta_star = jnp.arccos(jnp.clip(1 / (1 - slip), -1.0, 1.0))  # where dj/dtheta = 0
     # The front region (theta_r None) starts at lo = 0.
     lo = jnp.zeros_like(theta0) if theta_r is None else jnp.maximum(theta_r, -theta_star)
-    shift = (lambda f: f) if offset is None else (lambda f: f - offset)
-    f_lo = shift(_shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0))
+    f_lo = _shear_displacement(lo, theta0, slip, 1.0, jnp.sin(lo), sin_theta0) - offset
     has_root = (slip < 0) & (f_lo < 0) & (theta_star < theta0)
 
     def newton(_, th):
@@ -262,7 +265,7 @@ def _shear_sign_change(theta0, theta_r, slip, steps, taylor, offset=None):
             sin, cos = 2 * half_sin * half_cos, 1 - 2 * half_sin**2
         else:
             sin, cos = jnp.sin(th), jnp.cos(th)
-        f = shift(_shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0))
+        f = _shear_displacement(th, theta0, slip, 1.0, sin, sin_theta0) - offset
         slope = _shear_displacement_slope(cos, slip)
         return jnp.clip(th - f / jnp.maximum(slope, 1e-12), lo, theta_star)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import functools
 import math
+import reprlib
 import weakref
 
 import jax
@@ -14,7 +15,7 @@ import numpy as np
 
 from .._leaves import _is_traced, _module_leaves
 from .._terrain.base import Terrain
-from .distribution import AbstractStressDistribution, _is_front
+from .distribution import AbstractStressDistribution, _as_distribution, _is_front
 from .geometry import AbstractWheel, _plain_rim
 from .shear_law import _shear_law
 
@@ -43,8 +44,8 @@ def _checks(wheel, terrain, distribution, load, slip, shear):
 
 
 def _distribution_rules(distribution, slip):
-    """The distribution's slip-dependent rules (unbound call, as above); none for None."""
-    return [] if distribution is None else type(distribution).constraints(distribution, slip)
+    """The distribution's slip-dependent rules (unbound call, as above)."""
+    return type(distribution).constraints(distribution, slip)
 
 
 def _argument_rules(load, slip):
@@ -104,34 +105,31 @@ def _numeric_argument(name: str, value):
             raise TypeError(f"solve_wheel: {name} must be a real number or array: {err}") from None
     kind = np.dtype(arr.dtype).kind
     if kind not in "iuf":
+        # An object array holds what was given (None, a dict, ...): named by its repr.
         kinds = {"b": "a boolean", "c": "a complex number", "U": "a string", "S": "bytes"}
-        what = "None" if value is None else kinds.get(kind, type(value).__name__)
+        what = kinds.get(kind, reprlib.repr(value) if kind == "O" else type(value).__name__)
         raise TypeError(f"solve_wheel: {name} must be a real number or array, got {what}")
     return value if _is_traced(value) or isinstance(value, jax.Array) else arr
 
 
 def _broadcast_shape(
-    wheel, terrain, distribution, load, slip, guess, slip_angle=None, lateral=None, terms=()
+    wheel, terrain, distribution, load, slip, guess, running, terms=()
 ) -> tuple[int, ...]:
     """The broadcast shape of every input, or ValueError naming the shapes that clash."""
     leaves = jax.tree_util.tree_leaves(
-        (wheel, terrain, distribution, load, slip, guess, slip_angle, lateral, terms)
+        (wheel, terrain, distribution, load, slip, guess, running, terms)
     )
     try:
         return tuple(np.broadcast_shapes(*(np.shape(x) for x in leaves)))
     except ValueError:
         pass
-    named = {"load": load, "slip": slip}
-    if guess is not None:
-        named["initial_entry_angle"] = guess
-    if slip_angle is not None:
-        named["slip_angle"] = slip_angle
+    named = {"load": load, "slip": slip, "initial_entry_angle": guess}
+    named |= {name: value for name, value, *_ in type(running).rules(running)}  # slip_angle, ...
     trees = (("wheel", wheel), (terrain.label, terrain), ("distribution", distribution))
     trees += tuple((f"terms[{k}]", term) for k, term in enumerate(terms))
-    for label, tree in trees + (("lateral", lateral),):
-        if tree is not None:
-            for path, leaf in _module_leaves(tree).items():
-                named[f"{label}.{path}"] = leaf
+    for label, tree in trees:
+        for path, leaf in _module_leaves(tree).items():
+            named[f"{label}.{path}"] = leaf
     shapes = {k: tuple(np.shape(v)) for k, v in named.items()}
     try:
         return tuple(np.broadcast_shapes(*shapes.values()))
@@ -157,10 +155,10 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
 
     Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
     """
+    distribution = _as_distribution(distribution)
     known = _checked_parameters(wheel, terrain, shear)
-    parameter_key = (
-        known if known is not None else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
-    )
+    checked = known is not None  # the wheel and terrain rules passed before: the rest
+    parameter_key = known if checked else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
     front = _is_front(distribution)  # no leaves, no rules
     trees = (wheel, terrain, distribution, load, slip)
     key = parameter_key + (() if front else _leaf_key(jax.tree_util.tree_leaves(distribution)))
@@ -168,7 +166,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     small, large = _magnitude_window(dtype)
     to_np = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
     with np.errstate(invalid="ignore", over="ignore"):
-        if known is not None:  # the wheel and terrain rules passed before: the rest
+        if checked:
             slip_np = to_np(slip)
             rules = _argument_rules(to_np(load), slip_np)
             if not front:
@@ -178,7 +176,7 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
             w, t, d, ld, sl = jax.tree_util.tree_map(to_np, trees)
             rules = _checks(w, t, d, ld, sl, shear)
     _check_rules(rules, dtype, small, large)
-    if known is None:
+    if not checked:
         _remember_checked(wheel, terrain, shear, parameter_key)
 
 
@@ -222,9 +220,12 @@ def _working_dtype_of(key, trees) -> np.dtype:
     """The floating dtype the solve runs in (`jnp.result_type(*leaves, float)`), cached
     by the leaves' (type, dtype, weak type) `key`: `jnp.result_type` costs ~90 us at
     batch 1.  Python scalars (no dtype) are left to JAX, uncached."""
-    if any(k[1] is None for k in key):  # (not `None in ...`: dtype == None is True)
+    if any(k[0] in _PYTHON_SCALARS for k in key):
         return np.dtype(jnp.result_type(*jax.tree_util.tree_leaves(trees), float))
     return _result_type_of(key)
+
+
+_PYTHON_SCALARS = (bool, int, float, complex)
 
 
 @functools.lru_cache(maxsize=256)
@@ -281,7 +282,8 @@ def _check_model(wheel, terrain, distribution, shear) -> None:
             "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
             f"LayeredSnow), got {type(terrain).__name__}"
         )
-    if distribution is not None and not isinstance(distribution, AbstractStressDistribution):
+    distribution = _as_distribution(distribution)
+    if not isinstance(distribution, AbstractStressDistribution):
         raise TypeError(
             "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
             f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"

@@ -102,6 +102,12 @@ class Lateral(eqx.Module):
         ]
 
 
+def _lateral_modulus(k_y, k):
+    """K_y [m] along the axle: `Lateral.shear_modulus`, or without one (None) the
+    terrain's longitudinal K [m] (`k`)."""
+    return k if k_y is None else k_y
+
+
 def combined_mobilisation(a: Array, b: Array) -> tuple[Array, Array]:
     """(a, b) (1 - exp(-u)) / u with u = sqrt(a^2 + b^2): the shares of the Mohr–Coulomb
     strength along x and y for modulus-scaled displacements a = j_x / K_x, b = j_y / K_y.

@@ -335,7 +335,7 @@ def drive_path(
     loads: Float[ArrayLike, "*steps n"],
     slip: Float[ArrayLike, "*steps n"],
     *,
-    lookahead: float | None = None,
+    lookahead: Float[ArrayLike, ""] | None = None,
 ) -> PathResult:
     """n wheels driven along prescribed paths over a `RutMap` (a test rig, a kinematic
     vehicle, a convoy), each step: read the rut ahead of every wheel, solve its
@@ -366,10 +366,11 @@ def drive_path(
     """
     if np.ndim(positions) != 3 or np.shape(positions)[-1] != 2:
         raise ValueError(f"positions must have shape (steps, n, 2); got {np.shape(positions)}")
-    if lookahead is None and not _is_traced(wheel.diameter):
-        lookahead = float(np.max(np.asarray(wheel.diameter))) / 2
-    if lookahead is not None and not _is_traced(lookahead):
-        rut_map.check_lookahead(lookahead)
+    if lookahead is None:  # the wheel's radius
+        diameter = wheel.diameter
+        traced = _is_traced(diameter)
+        lookahead = jnp.max(diameter) / 2 if traced else float(np.max(np.asarray(diameter))) / 2
+    rut_map.check_lookahead(lookahead)  # (a traced one is not checked)
     return _drive_path(wheel, terrain, rut_map, positions, headings, loads, slip, lookahead)
 
 
@@ -382,12 +383,11 @@ def _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahe
     loads = jnp.broadcast_to(jnp.asarray(loads, positions.dtype), (steps, n))
     slips = jnp.broadcast_to(jnp.asarray(slip, positions.dtype), (steps, n))
     width = jnp.broadcast_to(wheel.width, (n,))
-    ahead = jnp.max(wheel.diameter) / 2 if lookahead is None else lookahead
 
     def step(carry, row):
         grid, previous, hint = carry
         position, heading, load, s = row
-        seen = grid.read(position, heading, width, ahead)
+        seen = grid.read(position, heading, width, lookahead)
         rut = Rut(terrain, seen, width, grid.k_0, grid.a_u)
         st = solve_wheel(wheel, _with_terrain(model, rut), load, s, initial_entry_angle=hint)
         total = jnp.maximum(_below_surface(st.sinkage, rut.floor_depth, terrain), seen)

@@ -66,21 +66,14 @@ def _along_s(s, masks, params, *, forces):
 @_along_s.def_jvp
 def _along_s_jvp(primals, tangents, *, forces):
     s, masks, params = primals
-    t_s, _, t_params = tangents
-    t_s = jnp.zeros_like(s) if t_s is None else t_s
-    t_params = jax.tree_util.tree_map(
-        lambda t, x: t if t is not None or x is None else jnp.zeros_like(x),
-        t_params,
-        params,
-        is_leaf=lambda t: t is None,
-    )
+    t_s, _, t_params = tangents  # None: a symbolic zero, which `filter_jvp` takes as such
 
     def moving(s, params):
         return jax.jvp(
             lambda s: forces(s, masks, params, moving_rule=True), (s,), (jnp.ones_like(s),)
         )
 
-    return jax.jvp(moving, (s, params), (t_s, t_params))
+    return eqx.filter_jvp(moving, (s, params), (t_s, t_params))
 
 
 @eqx.filter_custom_jvp

@@ -25,33 +25,50 @@ class AbstractContactRule(eqx.Module):
     """A contact rule (no fields; static in the compiled programs).
 
     - `nodes(law, nodes_per_panel)`: the quadrature nodes per panel, `(driving,
-      braking)` (`AbstractShearLaw.nodes`).
+      braking)`: the law's own table for the rule (`law_nodes`) or, given
+      `nodes_per_panel`, that many on every panel (`uniform_nodes`).
     - `prepare_slip(slip)`: the slips as the rule's layout needs them.
-    - `start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear)`: (over,
-      target, lower, upper, s0) of the solver (`start.py`).
-    - `contact(contact, slip, terrain, distribution, law, n, braking, vertical_only,
-      side, bulldozing, terms, bottomed, moving_rule)`: (W, R, T, M, F_y, M_z) of one
-      element (scalar inputs), or W alone with `vertical_only`.
+    - `start(vertical, theta_cap, load, slip, wheel, terrain, shear)`: (over, target,
+      lower, upper, s0) of the solver (`start.py`); `warm_start(vertical, theta_cap,
+      load, slip, guess, wheel, terrain)` the same from a previous entry angle `guess`.
+    - `contact(contact, slip, terrain, distribution, law, n, running, braking,
+      vertical_only, terms, bottomed, moving_rule)`: (W, R, T, M, F_y, M_z) of one
+      element (scalar inputs; `running` from `running.py`), or W alone with
+      `vertical_only`.
     - `warm_layout`: whether a warm-started solve (a simulation step) compiles both node
       layouts and picks one per step (`contact._layout`).
     """
 
     warm_layout: ClassVar[bool] = False
 
+    def nodes(self, law, nodes_per_panel: int | None) -> tuple:
+        # Unbound calls: an equinox bound method costs ~40 us to create (every eager call).
+        if nodes_per_panel is None:
+            return type(self).law_nodes(self, law)
+        return type(self).uniform_nodes(self, nodes_per_panel)
+
     @abc.abstractmethod
-    def nodes(self, law, nodes_per_panel) -> tuple:
+    def law_nodes(self, law) -> tuple:
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def uniform_nodes(self, n: int) -> tuple:
         raise NotImplementedError
 
     def prepare_slip(self, slip):
         return slip
 
     @abc.abstractmethod
-    def start(self, vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         raise NotImplementedError
 
     @abc.abstractmethod
     def contact(
-        self, contact, slip, terrain, distribution, law, n, braking, vertical_only, side,
-        bulldozing, terms, bottomed, moving_rule,
+        self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
+        terms, bottomed, moving_rule,
     ):  # fmt: skip
         raise NotImplementedError

@@ -26,7 +26,7 @@ from jaxtyping import Array
 
 from .._terrain.shear import _signed_mobilisation
 from .._terrain.wong import WongSnow
-from .distribution import _is_front
+from .distribution import _as_distribution, _is_front
 from .geometry import _layer_width, _shear_displacement_slope, _shear_sign_change, _sincos_half
 from .lateral import combined_mobilisation
 
@@ -91,7 +91,7 @@ class AbstractShearLaw(eqx.Module):
 
     def check(self, terrain, distribution) -> None:
         """Raise `ValueError` if the law does not apply to this terrain and distribution
-        (`distribution` is None or `FrontRegion()` for the front region); default: it
+        (`FrontRegion()`, or its short spelling None, for the front region); default: it
         applies everywhere."""
 
     def constraints(self, terrain) -> list[tuple[str, Array, Array, str]]:
@@ -218,7 +218,7 @@ class ThesisSimplified(AbstractShearLaw):
 
     def check(self, terrain, distribution) -> None:
         """`ValueError` unless the terrain is `WongSnow` on the front region."""
-        if not (_is_front(distribution) and isinstance(terrain, WongSnow)):
+        if not (_is_front(_as_distribution(distribution)) and isinstance(terrain, WongSnow)):
             raise ValueError(
                 "shear='simplified' (eq. 4.13) is derived from Wong's law on the front region "
                 "of the contact: it needs a WongSnow terrain and distribution=None; use "

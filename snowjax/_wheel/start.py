@@ -87,23 +87,25 @@ def _scan_grid(terrain, dtype):
     return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
 
 
-def _scan_start(vertical, theta_cap, load, slip, guess, wheel, terrain, shear):
+def _warm_bracket_start(vertical, theta_cap, load, guess):
+    """(over, target, lower, upper, s0) of a warm start from a previous entry angle
+    `guess` (any terrain): the bracket is the whole range and the capacity W at s_min."""
+    s_min = jnp.full_like(load, _s_min(load.dtype))
+    w_top = vertical(_theta_from_s(s_min, theta_cap))
+    over = w_top < load
+    target = jnp.where(over, 0.5 * w_top, load)
+    return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
+
+
+def _scan_start(vertical, theta_cap, load, terrain):
     """(over, target, lower, upper, s0) from a scan of W over entry angles (any terrain).
 
-    Without a warm start, W is evaluated on a grid of entry angles (`_scan_grid`); the
-    shallowest grid interval where W crosses the load brackets the root (for a layered
-    snow, whose W(theta0) need not be monotone, this selects the shallowest equilibrium),
-    and interpolating ln W linearly in s^2 inside it (exact for a power law) gives s0.
-    With a warm start, the bracket is the whole range and the capacity W at s_min.
+    W is evaluated on a grid of entry angles (`_scan_grid`); the shallowest grid interval
+    where W crosses the load brackets the root (for a layered snow, whose W(theta0) need
+    not be monotone, this selects the shallowest equilibrium), and interpolating ln W
+    linearly in s^2 inside it (exact for a power law) gives s0.
     """
-    del slip, wheel, shear
     dtype = load.dtype
-    s_min = jnp.full_like(load, _s_min(dtype))
-    if guess is not None:
-        w_top = vertical(_theta_from_s(s_min, theta_cap))
-        over = w_top < load
-        target = jnp.where(over, 0.5 * w_top, load)
-        return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
     s_grid = _scan_grid(terrain, dtype)
     points = s_grid.shape[0]
     w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(

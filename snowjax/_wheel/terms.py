@@ -32,7 +32,7 @@ from jaxtyping import Array, ArrayLike
 from .._leaves import _module_leaves, _parameter_infos
 from .._terrain.base import AbstractTerrain
 from .geometry import AbstractContact, ContactPoints
-from .lateral import bulldozing_pressure
+from .lateral import _lateral_modulus, bulldozing_pressure
 from .shear_law import AbstractShearLaw
 
 __all__ = ["AbstractForceTerm", "ContactNodes", "Resultants"]
@@ -199,7 +199,7 @@ class TerrainStresses(AbstractForceTerm):
             return nodes.integrate(normal=nodes.sigma, shear=strength * g)
         travel = theta0 - nodes.theta - nodes.points.shortening
         j_y = nodes.radius * (1 - nodes.slip) * travel * nodes.tan_slip_angle
-        k_y = k if self.lateral_modulus is None else self.lateral_modulus
+        k_y = _lateral_modulus(self.lateral_modulus, k)
         share_x, share_y = self.law.combined_mobilisation(
             j / k, j_y / k_y, nodes.sigma, theta0, nodes.slip, diameter, nodes.terrain
         )

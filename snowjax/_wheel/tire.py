@@ -417,7 +417,7 @@ class TreadContact(AbstractContact):
         theta0, half = self.entry_angle, self.tread.half_angle
         split, has_root, _ = _shear_sign_change(theta0, exit_angle, slip, 12, False)
         on_arc = has_root & (split >= half)
-        j_f = _shear_displacement(half, theta0, slip, 1.0)
+        j_f = _shear_displacement(half, theta0, slip, 1.0, jnp.sin(half), jnp.sin(theta0))
         lo = jnp.maximum(-half, exit_angle)
         sin_root = jnp.sin(half) + j_f / jnp.where(slip < 0, slip, -1.0)
         on_flat = (slip < 0) & (sin_root > jnp.sin(lo)) & (sin_root < jnp.sin(half))
