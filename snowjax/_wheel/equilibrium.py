@@ -467,15 +467,14 @@ def solve_wheel(
     if not running.straight or terms:
         concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
         concrete_running = jax.tree_util.tree_map(concrete, running)
-        rules = type(running).rules(concrete_running)  # unbound: see below
+        rules = type(running).rules(concrete_running)  # unbound (below)
         rules += _term_rules(jax.tree_util.tree_map(concrete, terms))
         dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
         _check_rules(rules, dtype, *_magnitude_window(dtype))
     rule = _contact_rule(terrain, distribution, wheel, running)
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
-    # every eager call.
-    # The rule travels as its class: a module among the static arguments costs the
-    # compiled function's dispatch ~5 us per call (flattened and hashed).
+    # every eager call.  The rule travels as its class: a module among the arguments
+    # costs the compiled function's dispatch ~5 us per call (flattened and hashed).
     nodes = type(rule).nodes(rule, shear, nodes_per_panel)
     options = (shear, nodes, int(max_steps), type(rule))
     layout = _layout(slip, warm_start=rule.warm_layout and initial_entry_angle is not None)
