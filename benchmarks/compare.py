@@ -4,20 +4,26 @@
     python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --out compare.md
 
 Shared 2-core virtual machines drift by tens of percent between runs minutes apart, so
-two separate `benchmarks/run.py` tables cannot show a 10 % change.  This script checks out
-the old revision into a temporary git worktree and measures both trees in fresh processes,
-alternating old, new, old, new, ... for `--rounds` rounds, each process pinned to one
-core; each row keeps the best time of each tree over all rounds (per process: best of 30
-calls, 7 at batch 100,000).  Rows: `solve_wheel` throughput at batch 1 to 100,000 (thesis
-tyre on the thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the
-in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and the cost of
-one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200 steps of
-10 ms); the first call of a fresh process (compile, batch 1); and the general quadrature:
-Bekker's Snow (U.S.) with Wong–Reece, the layered snow on the front region, the rim on
-Wong snow at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong snow and on
-Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips -0.3 to 0.9).
-The table is printed (`--out FILE`: also written there): it compares revisions, so it
-belongs in a commit message or the CHANGELOG, not on the documentation's pages.
+two separate `benchmarks/run.py` tables cannot show a 10 % change, and neither can two
+processes run one after the other (two revisions of the same compiled programs measured
+that way moved by 0.80-1.43 both ways between sessions).  This script checks out the old
+revision into a temporary git worktree and, for each of `--rounds` rounds, starts one
+measuring process per tree, both pinned to the same core, which compile every row first
+(the first call of a fresh process is itself a row) and then time the rows on request,
+one row of one tree at a time, alternating the trees row by row (old first on even rows
+of even rounds, new first otherwise): the two measurements of a row are seconds apart,
+so the machine's drift moves both.  Each row keeps each tree's best time over the rounds
+(per request: best of 10 calls, 3 at batch 100,000).  Rows: `solve_wheel` throughput at
+batch 1 to 100,000 (thesis tyre on the thesis snow, classic shear, loads 1-9 kN, slips
+0-0.9, float64), the in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and
+the cost of one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200
+steps of 10 ms); the first call of a fresh process (compile, batch 1); and the general
+quadrature: Bekker's Snow (U.S.) with Wong–Reece, the layered snow on the front region,
+the rim on Wong snow at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong
+snow and on Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips
+-0.3 to 0.9).  The table is printed (`--out FILE`: also written there): it compares
+revisions, so it belongs in a commit message or the CHANGELOG, not on the documentation's
+pages.
 """
 
 from __future__ import annotations
@@ -34,14 +40,16 @@ import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
 SIZES = (1, 10, 100, 1_000, 10_000, 100_000)
+FIRST_CALL = "first call (compile), batch 1"
 
 
-def measure() -> dict[str, float]:
-    """Run in a fresh process whose `snowjax` is the tree under test; seconds per call.
-
-    The process runs on one core (the last one it may use; Linux): unpinned, XLA's and the
-    other tree's threads share the cores, and rows of unchanged code moved by 0.85-1.26
-    between runs on a shared 2-core machine.
+def _rows() -> dict:
+    """Compile every row (the first call of this fresh process timed as its own row) and
+    return {row: (callable, calls per request, divisor)}: seconds per row = best of the
+    calls / divisor.  Runs in the measuring process, whose `snowjax` is the tree under
+    test, on one core (the last one it may use; Linux): unpinned, XLA's and the other
+    tree's threads share the cores, and rows of unchanged code moved by 0.85-1.26 between
+    runs on a shared 2-core machine.
     """
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {max(os.sched_getaffinity(0))})
@@ -55,25 +63,19 @@ def measure() -> dict[str, float]:
 
     wheel, snow = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
     rng = np.random.default_rng(0)
-    out: dict[str, float] = {"snowjax": sj.__file__}  # type: ignore[dict-item]
-
-    def best(fn, repeats):
-        fn()
-        times = []
-        for _ in range(repeats):
-            t = time.perf_counter()
-            fn()
-            times.append(time.perf_counter() - t)
-        return min(times)
 
     t0 = time.perf_counter()  # a fresh process: the first call compiles
     sj.solve_wheel(wheel, snow, 5000.0, 0.3).entry_angle.block_until_ready()
-    out["first call (compile), batch 1"] = time.perf_counter() - t0
+    first = time.perf_counter() - t0
+    rows: dict = {FIRST_CALL: (lambda: None, 0, first)}
 
     for n in SIZES:
         load, slip = rng.uniform(1e3, 9e3, n), rng.uniform(0.0, 0.9, n)
-        run = lambda: sj.solve_wheel(wheel, snow, load, slip).entry_angle.block_until_ready()  # noqa: E731,B023
-        out[f"batch {n:,}"] = best(run, 30 if n <= 10_000 else 7)
+
+        def run(load=load, slip=slip):
+            sj.solve_wheel(wheel, snow, load, slip).entry_angle.block_until_ready()
+
+        rows[f"batch {n:,}"] = (run, 10 if n <= 10_000 else 3, 1)
 
     loads, offsets = jnp.full(4, 5000.0), jnp.arange(4, dtype=float)
 
@@ -84,13 +86,11 @@ def measure() -> dict[str, float]:
 
     scan = jax.jit(lambda ts: jax.lax.scan(step, jnp.full(4, 0.5), ts))
     ts = jnp.arange(500, dtype=float)
-    out["in-step, per wheel"] = best(lambda: jax.block_until_ready(scan(ts)), 20) / (500 * 4)
+    rows["in-step, per wheel"] = (lambda: jax.block_until_ready(scan(ts)), 10, 500 * 4)
 
     vehicle = sj.Vehicle(mass=2000.0, wheel_inertia=1.5, wheel=wheel, num_wheels=4)
     sim = lambda: sj.simulate_longitudinal(vehicle, snow, 400.0, 2.0, 0.01)  # noqa: E731
-    out["simulate_longitudinal, per wheel-step"] = best(
-        lambda: jax.block_until_ready(sim()), 10
-    ) / (200 * 4)
+    rows["simulate_longitudinal, per wheel-step"] = (lambda: jax.block_until_ready(sim()), 5, 800)
     # Other terrains, the Wong–Reece distribution, a slip angle and a deflecting tyre (the
     # general quadrature).
     tire = sj.DeflectingTire(wheel.diameter, wheel.width, 0.176, 100e3, 0.0)
@@ -111,8 +111,31 @@ def measure() -> dict[str, float]:
                 st = _solve(this_wheel, terrain, dist, load, slip, angle)
                 st.entry_angle.block_until_ready()
 
-            out[f"{label}, batch {n:,}"] = best(run, 30 if n == 1 else 10)
-    return out
+            rows[f"{label}, batch {n:,}"] = (run, 10 if n == 1 else 5, 1)
+    for fn, calls, _ in rows.values():
+        if calls:
+            fn()  # compile before the first request
+    return rows
+
+
+def serve() -> None:
+    """The measuring process: compile the rows, print their names (JSON, one line), then
+    answer each row name read from stdin with its seconds (JSON, one line)."""
+    import snowjax  # noqa: PLC0415
+
+    rows = _rows()
+    print(json.dumps({"snowjax": snowjax.__file__, "rows": list(rows)}), flush=True)
+    for line in sys.stdin:
+        fn, calls, divisor = rows[line.strip()]
+        if not calls:  # measured once, at start-up
+            print(json.dumps(divisor), flush=True)
+            continue
+        times = []
+        for _ in range(calls):
+            t = time.perf_counter()
+            fn()
+            times.append(time.perf_counter() - t)
+        print(json.dumps(min(times) / divisor), flush=True)
 
 
 def _solve(wheel, terrain, distribution, load, slip, slip_angle):
@@ -129,24 +152,42 @@ def _solve(wheel, terrain, distribution, load, slip, slip_angle):
     )
 
 
-def _run_tree(tree: pathlib.Path) -> dict[str, float]:
-    env = dict(os.environ, PYTHONPATH=str(tree), JAX_PLATFORMS="cpu")
-    env.pop("JAX_COMPILATION_CACHE_DIR", None)  # the first call must compile
-    code = (
-        f"import sys, json; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); "
-        "import compare; print(json.dumps(compare.measure()))"
-    )
-    res = subprocess.run(
-        [sys.executable, "-c", code],
-        env=env,
-        cwd=tempfile.gettempdir(),
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    out = json.loads(res.stdout.strip().splitlines()[-1])
-    assert out.pop("snowjax").startswith(str(tree)), "measured the wrong snowjax"
-    return out
+class _Worker:
+    """A measuring process (`serve`) of one tree."""
+
+    def __init__(self, tree: pathlib.Path):
+        env = dict(os.environ, PYTHONPATH=str(tree), JAX_PLATFORMS="cpu")
+        env.pop("JAX_COMPILATION_CACHE_DIR", None)  # the first call must compile
+        code = (
+            f"import sys; sys.path.insert(0, {str(ROOT / 'benchmarks')!r}); "
+            "import compare; compare.serve()"
+        )
+        self.process = subprocess.Popen(
+            [sys.executable, "-c", code],
+            env=env,
+            cwd=tempfile.gettempdir(),
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        hello = json.loads(self._read())
+        assert hello["snowjax"].startswith(str(tree)), "measured the wrong snowjax"
+        self.rows = hello["rows"]
+
+    def _read(self) -> str:
+        line = self.process.stdout.readline()  # type: ignore[union-attr]
+        if not line:
+            raise RuntimeError(f"the measuring process exited ({self.process.wait()})")
+        return line
+
+    def time(self, row: str) -> float:
+        self.process.stdin.write(row + "\n")  # type: ignore[union-attr]
+        self.process.stdin.flush()  # type: ignore[union-attr]
+        return json.loads(self._read())
+
+    def close(self) -> None:
+        self.process.stdin.close()  # type: ignore[union-attr]
+        self.process.wait()
 
 
 def _fmt(name: str, seconds: float) -> str:
@@ -192,9 +233,17 @@ def main(argv=None) -> None:
         try:
             best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
             for r in range(args.rounds):
-                for label, tree in trees.items():
-                    for name, t in _run_tree(tree).items():
-                        best[label][name] = min(t, best[label].get(name, float("inf")))
+                # One after the other: each compiles alone (the first-call row).
+                workers = {label: _Worker(tree) for label, tree in trees.items()}
+                try:
+                    for k, row in enumerate(workers["old"].rows):
+                        order = ("old", "new") if (k + r) % 2 == 0 else ("new", "old")
+                        for label in order:
+                            t = workers[label].time(row)
+                            best[label][row] = min(t, best[label].get(row, float("inf")))
+                finally:
+                    for worker in workers.values():
+                        worker.close()
                 print(f"round {r + 1}/{args.rounds} done", file=sys.stderr)
         finally:
             for label in revs:
@@ -205,8 +254,8 @@ def main(argv=None) -> None:
                 )
 
     lines = [
-        f"Old: {old_rev}; new: {new_rev}. Best of {args.rounds} interleaved "
-        f"rounds each ({time.strftime('%Y-%m-%d')}).",
+        f"Old: {old_rev}; new: {new_rev}. Best of {args.rounds} rounds, the trees "
+        f"alternating row by row ({time.strftime('%Y-%m-%d')}).",
         "",
         f"| row (Wong snow, front region unless named) | {old_rev} | {new_rev} | new / old time |",
         "|---|---|---|---|",
