@@ -10,20 +10,20 @@ that way moved by 0.80-1.43 both ways between sessions).  This script checks out
 revision into a temporary git worktree and, for each of `--rounds` rounds, starts one
 measuring process per tree, both pinned to the same core, which compile every row first
 (the first call of a fresh process is itself a row) and then time the rows on request,
-one row of one tree at a time, alternating the trees row by row (old first on even rows
-of even rounds, new first otherwise): the two measurements of a row are seconds apart,
-so the machine's drift moves both.  Each row keeps each tree's best time over the rounds
-(per request: best of 10 calls, 3 at batch 100,000).  Rows: `solve_wheel` throughput at
-batch 1 to 100,000 (thesis tyre on the thesis snow, classic shear, loads 1-9 kN, slips
-0-0.9, float64), the in-step latency (4 wheels in a jitted `lax.scan`, warm-started) and
-the cost of one `simulate_longitudinal` step per wheel (4 driven wheels, 400 N m, 200
-steps of 10 ms); the first call of a fresh process (compile, batch 1); and the general
-quadrature: Bekker's Snow (U.S.) with Wong–Reece, the layered snow on the front region,
-the rim on Wong snow at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong
-snow and on Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips
--0.3 to 0.9).  The table is printed (`--out FILE`: also written there): it compares
-revisions, so it belongs in a commit message or the CHANGELOG, not on the documentation's
-pages.
+one row of one tree at a time, alternating the trees row by row (old first where the
+row's and the round's indices sum to an even number, new first otherwise): the two
+measurements of a row are seconds apart, so the machine's drift moves both.  Each row
+keeps each tree's best time over the rounds (per request: best of 10 calls, 3 at batch
+100,000).  Rows: `solve_wheel` throughput at batch 1 to 100,000 (thesis tyre on the
+thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the in-step latency (4
+wheels in a jitted `lax.scan`, warm-started) and the cost of one `simulate_longitudinal`
+step per wheel (4 driven wheels, 400 N m, 200 steps of 10 ms); the first call of a fresh
+process (compile, batch 1); and the general quadrature: Bekker's Snow (U.S.) with
+Wong–Reece, the layered snow on the front region, the rim on Wong snow at a slip angle of
+0.1 rad, and a deflecting tyre (100 kPa) on Wong snow and on Bekker's snow with
+Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  The table is
+printed (`--out FILE`: also written there): it compares revisions, so it belongs in a
+commit message or the CHANGELOG, not on the documentation's pages.
 """
 
 from __future__ import annotations
@@ -140,8 +140,8 @@ def serve() -> None:
 def _solver(wheel, terrain, distribution, slip_angle):
     """`(load, slip) -> solve_wheel(...)` with a distribution, in the spelling of the tree
     measured (revisions before the contact model took a `distribution=` keyword); the
-    contact model built once, outside the timed calls, as a user builds it (building it
-    on every call cost 0.1-0.4 ms, a batch-1 row's third)."""
+    contact model built once, outside the timed calls, as a user builds it (built on every
+    call, the new tree's batch-1 rows measured 1.06-1.39 the old tree's keywords)."""
     import snowjax as sj  # noqa: PLC0415
 
     if "distribution" in inspect.signature(sj.solve_wheel).parameters:
