@@ -138,3 +138,31 @@ def test_a_checked_wheel_and_terrain_still_check_the_distribution():
     sj.solve_wheel(wheel, sj.ContactModel(soil, sj.WongReece(0.43, 0.32)), 800.0, 0.2)
     with pytest.raises(ValueError, match=r"distribution\.c1 \+ c2 \* slip"):
         sj.solve_wheel(wheel, sj.ContactModel(soil, sj.WongReece(-0.5, 0.32)), 800.0, 0.2)
+
+
+def test_a_checked_lateral_law_and_term_still_check_what_changes():
+    """The lateral law and force terms of a model are checked once per object (their
+    leaves are JAX arrays, immutable); the slip angle on every call, and a new object
+    afresh."""
+    lateral = sj.Lateral(shear_modulus=0.02)
+    model = sj.ContactModel(SNOW, lateral=lateral, terms=(Drag(jnp.asarray(1e3)),))
+    sj.solve_wheel(WHEEL, model, 4e3, 0.3, slip_angle=0.1)
+    with pytest.raises(ValueError, match=re.escape("slip_angle must be finite and in (-pi/2")):
+        sj.solve_wheel(WHEEL, model, 4e3, 0.3, slip_angle=2.0)
+    bad = sj.ContactModel(SNOW, lateral=sj.Lateral(shear_modulus=-0.02))
+    for _ in range(2):  # a failed check is not remembered
+        with pytest.raises(ValueError, match=r"lateral\.shear_modulus must be finite and > 0"):
+            sj.solve_wheel(WHEEL, bad, 4e3, 0.3, slip_angle=0.1)
+    bad = sj.ContactModel(SNOW, lateral=lateral, terms=(Drag(jnp.asarray(np.nan)),))
+    for _ in range(2):
+        with pytest.raises(ValueError, match=r"terms\[0\]\.pressure must be finite"):
+            sj.solve_wheel(WHEEL, bad, 4e3, 0.3, slip_angle=0.1)
+
+
+class Drag(sj.AbstractForceTerm):
+    """A resistance q r b [N] (q [Pa]) for the checks above."""
+
+    pressure: jax.Array
+
+    def forces(self, nodes):
+        return sj.Resultants(motion_resistance=self.pressure * nodes.radius * 0.3)

@@ -45,6 +45,7 @@ from .geometry import AbstractWheel
 from .inputs import (
     _broadcast_shape,
     _check_model,
+    _check_module_rules,
     _check_options,
     _check_rules,
     _fits,
@@ -56,11 +57,11 @@ from .inputs import (
 from .lateral import Lateral
 from .model import ContactModel, _takes_model, _unpack_model
 from .root import _implicit_root, _root_outputs
-from .running import _STRAIGHT, AbstractRunning, SlipAngle
+from .running import _STRAIGHT, AbstractRunning, SlipAngle, _angle_rules, _default_lateral
 from .shear_law import _shear_law
 from .start import _balance_residual, _theta_from_s
 from .status import Status, _throw_on_failure
-from .terms import _term_rules
+from .terms import _one_term_rules, _term_rules
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -440,7 +441,8 @@ def solve_wheel(
     running: AbstractRunning = _STRAIGHT
     if slip_angle is not None:
         slip_angle = _numeric_argument("slip_angle", slip_angle)
-        running = SlipAngle(slip_angle, Lateral() if lateral is None else lateral)
+        lateral = _default_lateral(jax.config.jax_enable_x64) if lateral is None else lateral
+        running = SlipAngle(slip_angle, lateral)
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
             # Straight running: the solver paths without a slip angle, at the broadcast shape.
             shape = _broadcast_shape(
@@ -463,14 +465,13 @@ def solve_wheel(
         return WheelState(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
-    _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
-    if not running.straight or terms:
-        concrete = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
-        concrete_running = jax.tree_util.tree_map(concrete, running)
-        rules = type(running).rules(concrete_running)  # unbound (below)
-        rules += _term_rules(jax.tree_util.tree_map(concrete, terms))
-        dtype = jnp.result_type(*jax.tree_util.tree_leaves((wheel, terrain, load, slip)), float)
-        _check_rules(rules, dtype, *_magnitude_window(dtype))
+    dtype = _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
+    if not running.straight:  # the slip angle; its lateral law once per object
+        angle = slip_angle if _is_traced(slip_angle) else np.asarray(slip_angle)
+        _check_rules(_angle_rules(angle), dtype, *_magnitude_window(dtype))
+        _check_module_rules(running.lateral, Lateral.constraints, dtype)
+    for k, term in enumerate(terms):
+        _check_module_rules(term, functools.partial(_one_term_rules, k), dtype)
     rule = _contact_rule(terrain, distribution, wheel, running)
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
     # every eager call.  The rule travels as its class: a module among the arguments

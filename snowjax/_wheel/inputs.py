@@ -116,11 +116,12 @@ def _broadcast_shape(
     wheel, terrain, distribution, load, slip, guess, running, terms=()
 ) -> tuple[int, ...]:
     """The broadcast shape of every input, or ValueError naming the shapes that clash."""
-    leaves = jax.tree_util.tree_leaves(
-        (wheel, terrain, distribution, load, slip, guess, running, terms)
-    )
+    shapes = _leaf_shapes(wheel) + _leaf_shapes(terrain) + _leaf_shapes(distribution)
+    shapes += [np.shape(x) for x in jax.tree_util.tree_leaves((load, slip, guess, running))]
+    for term in terms:
+        shapes += _leaf_shapes(term)
     try:
-        return tuple(np.broadcast_shapes(*(np.shape(x) for x in leaves)))
+        return tuple(np.broadcast_shapes(*shapes))
     except ValueError:
         pass
     named = {"load": load, "slip": slip, "initial_entry_angle": guess}
@@ -150,8 +151,9 @@ def _check_options(max_steps) -> None:
         raise ValueError(f"solve_wheel: max_steps must be an integer >= 1, got {max_steps!r}")
 
 
-def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
-    """Raise ValueError naming the argument when concrete inputs are out of range.
+def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> np.dtype:
+    """Raise ValueError naming the argument when concrete inputs are out of range; return
+    the working dtype.
 
     Concrete leaves are checked with NumPy (no JAX dispatch per rule); traced ones skipped.
     """
@@ -161,23 +163,77 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> None:
     parameter_key = known if checked else _leaf_key(jax.tree_util.tree_leaves((wheel, terrain)))
     front = _is_front(distribution)  # no leaves, no rules
     trees = (wheel, terrain, distribution, load, slip)
-    key = parameter_key + (() if front else _leaf_key(jax.tree_util.tree_leaves(distribution)))
-    dtype = _working_dtype_of(key + _leaf_key((load, slip)), trees)
+    distribution_key, distribution_np = ((), distribution) if front else _concrete(distribution)
+    dtype = _working_dtype_of(parameter_key + distribution_key + _leaf_key((load, slip)), trees)
     small, large = _magnitude_window(dtype)
-    to_np = lambda x: np.asarray(x) if not _is_traced(x) else x  # noqa: E731
     with np.errstate(invalid="ignore", over="ignore"):
         if checked:
-            slip_np = to_np(slip)
-            rules = _argument_rules(to_np(load), slip_np)
+            slip_np = _to_numpy(slip)
+            rules = _argument_rules(_to_numpy(load), slip_np)
             if not front:
-                d = jax.tree_util.tree_map(to_np, distribution)
-                rules += _distribution_rules(d, slip_np)
+                rules += _distribution_rules(distribution_np, slip_np)
         else:
-            w, t, d, ld, sl = jax.tree_util.tree_map(to_np, trees)
+            w, t, d, ld, sl = jax.tree_util.tree_map(_to_numpy, trees)
             rules = _checks(w, t, d, ld, sl, shear)
     _check_rules(rules, dtype, small, large)
     if not checked:
         _remember_checked(wheel, terrain, shear, parameter_key)
+    return dtype
+
+
+def _per_module(table: dict, module, compute, key=()):
+    """`compute(module)`, remembered in `table` per module object (and `key`) when the
+    module's leaves are concrete JAX arrays (immutable): parameter sets are usually
+    reused across calls (a simulation, a sweep), and at batch 1 each of these eager steps
+    costs tens of microseconds.  Weak references make a reused id of a dead object a
+    miss."""
+    entry = table.get((id(module), key))
+    if entry is not None and entry[0]() is module:
+        return entry[1]
+    value = compute(module)
+    leaves = jax.tree_util.tree_leaves(module)
+    if all(isinstance(x, jax.Array) and not _is_traced(x) for x in leaves):
+        if len(table) >= 256:
+            table.clear()
+        table[(id(module), key)] = (weakref.ref(module), value)
+    return value
+
+
+_VALID_MODULES: dict = {}  # modules whose rules passed, per working dtype
+_LEAF_SHAPES: dict = {}  # the shapes of a module's leaves
+_CONCRETE: dict = {}  # a module's leaf key and its copy with NumPy leaves
+
+
+def _check_module_rules(module, rules_of, dtype) -> None:
+    """Check `rules_of(module)` (as `_check_rules`), once per module object and dtype
+    (`_per_module`): the parts of the contact model that do not change between calls
+    (`Lateral`, force terms)."""
+
+    def check(module):
+        rules = rules_of(jax.tree_util.tree_map(_to_numpy, module))
+        _check_rules(rules, dtype, *_magnitude_window(dtype))
+
+    _per_module(_VALID_MODULES, module, check, dtype)
+
+
+def _to_numpy(x):
+    return np.asarray(x) if not _is_traced(x) else x
+
+
+def _leaf_shapes(module) -> list:
+    return _per_module(
+        _LEAF_SHAPES, module, lambda m: [np.shape(x) for x in jax.tree_util.tree_leaves(m)]
+    )
+
+
+def _concrete(module) -> tuple:
+    """(leaf key, the module with NumPy leaves) (`_per_module`)."""
+
+    def compute(module):
+        key = _leaf_key(jax.tree_util.tree_leaves(module))
+        return key, jax.tree_util.tree_map(_to_numpy, module)
+
+    return _per_module(_CONCRETE, module, compute)
 
 
 def _check_rules(rules, dtype, small, large) -> None:

@@ -17,6 +17,7 @@ of `lateral.py`, optionally the sidewall bulldozing).  Each says
 from __future__ import annotations
 
 import abc
+import functools
 from typing import Any, ClassVar
 
 import equinox as eqx
@@ -111,9 +112,7 @@ class SlipAngle(AbstractRunning):
         return jnp.tan(self.angle)
 
     def rules(self) -> list[tuple[str, Any, Any, str]]:
-        ok = jnp.abs(self.angle) < MAX_SLIP_ANGLE
-        rules = [("slip_angle", self.angle, ok, "in (-pi/2, pi/2) rad")]
-        return rules + Lateral.constraints(self.lateral)
+        return _angle_rules(self.angle) + Lateral.constraints(self.lateral)
 
     def safe(self, valid) -> SlipAngle:
         pick = lambda x, ref: jnp.where(valid, x, jnp.asarray(ref, x.dtype))  # noqa: E731
@@ -127,5 +126,17 @@ class SlipAngle(AbstractRunning):
         return SlipAngle(pick(self.angle, 0.0), lateral)
 
 
+def _angle_rules(angle) -> list[tuple[str, Any, Any, str]]:
+    """The slip angle's validity rule (NumPy or JAX values)."""
+    return [("slip_angle", angle, abs(angle) < MAX_SLIP_ANGLE, "in (-pi/2, pi/2) rad")]
+
+
 # One instance (no fields) for the straight-running callers.
 _STRAIGHT = Straight()
+
+
+@functools.lru_cache(maxsize=2)
+def _default_lateral(x64: bool) -> Lateral:
+    """`Lateral()`, built once per precision mode (building it costs ~30 us per call)."""
+    del x64  # the cache key: the fields' dtype follows jax_enable_x64
+    return Lateral()

@@ -249,13 +249,17 @@ def _term_rules(terms) -> list[tuple[str, Any, Any, str]]:
     """Validity of the terms' parameters, as `solve_wheel`'s input rules: (name, value, ok
     mask, allowed range) of every array leaf, from its `snowjax.parameter` metadata where
     it has some, else finite (every rule's value is checked finite)."""
+    return [rule for k, term in enumerate(terms) for rule in _one_term_rules(k, term)]
+
+
+def _one_term_rules(k: int, term) -> list[tuple[str, Any, Any, str]]:
+    """`_term_rules` of `terms[k]`."""
+    infos = _parameter_infos(term)
     rules = []
-    for k, term in enumerate(terms):
-        infos = _parameter_infos(term)
-        for path, leaf in _module_leaves(term).items():
-            info = infos.get(path)
-            ok, allowed = (info.ok(leaf), info.allowed()) if info is not None else (True, "real")
-            rules.append((f"terms[{k}].{path}", leaf, ok, allowed))
+    for path, leaf in _module_leaves(term).items():
+        info = infos.get(path)
+        ok, allowed = (info.ok(leaf), info.allowed()) if info is not None else (True, "real")
+        rules.append((f"terms[{k}].{path}", leaf, ok, allowed))
     return rules
 
 
