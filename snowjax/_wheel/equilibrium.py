@@ -441,7 +441,8 @@ def solve_wheel(
     running: AbstractRunning = _STRAIGHT
     if slip_angle is not None:
         slip_angle = _numeric_argument("slip_angle", slip_angle)
-        lateral = _default_lateral(jax.config.jax_enable_x64) if lateral is None else lateral
+        x64 = bool(jax.config.read("jax_enable_x64"))
+        lateral = _default_lateral(x64) if lateral is None else lateral
         running = SlipAngle(slip_angle, lateral)
         if not _is_traced(slip_angle) and np.all(np.asarray(slip_angle) == 0):
             # Straight running: the solver paths without a slip angle, at the broadcast shape.
@@ -466,7 +467,7 @@ def solve_wheel(
             empty, empty, empty, empty, empty, empty, empty, empty, jnp.zeros(shape, jnp.int32)
         )
     dtype = _validate_eagerly(wheel, terrain, distribution, load, slip, shear)
-    if not running.straight:  # the slip angle; its lateral law once per object
+    if isinstance(running, SlipAngle):  # the slip angle; its lateral law once per object
         angle = slip_angle if _is_traced(slip_angle) else np.asarray(slip_angle)
         _check_rules(_angle_rules(angle), dtype, *_magnitude_window(dtype))
         _check_module_rules(running.lateral, Lateral.constraints, dtype)
