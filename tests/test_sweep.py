@@ -267,9 +267,10 @@ def test_damaged_files_are_detected_and_recomputed(reference, tmp_path):
 
 
 def _definition(**kw):
-    args = dict(grid=True, shear="classic", chunk_size=C, nodes_per_panel=None, max_steps=64)
-    args.update(kw)
-    return _sweep._define(WHEEL, SNOW, LOADS, SLIPS, **args)
+    """The sweep's definition; `shear=` and `nodes_per_panel=` go into the model."""
+    parts = {k: kw.pop(k) for k in ("shear", "nodes_per_panel") if k in kw}
+    args = dict(grid=True, chunk_size=C, max_steps=64) | kw
+    return _sweep._define(WHEEL, sj.ContactModel(SNOW, **parts), LOADS, SLIPS, **args)
 
 
 def test_a_different_sweep_is_refused(reference, tmp_path):

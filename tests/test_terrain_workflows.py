@@ -293,8 +293,10 @@ def test_sweep_bekker_wong_reece_equals_solve_wheel(bekker_sweep):
             run=sj.SweepRun(chunk_size=N),
         )
     layered = sj.LayeredSnow.ice_layer_example()
-    d = _sweep._define(WHEEL, layered, SWEEP_LOADS, SWEEP_SLIPS, grid=True, shear="classic",
-                          chunk_size=N, nodes_per_panel=None, max_steps=64)  # fmt: skip
+    model = sj.ContactModel(layered)
+    d = _sweep._define(
+        WHEEL, model, SWEEP_LOADS, SWEEP_SLIPS, grid=True, chunk_size=N, max_steps=64
+    )
     assert "top.p_w" in d.parameters and "ice_failure_pressure" in d.parameters
 
 

@@ -13,8 +13,6 @@ of `tire_forces_on_snow`.
 
 from __future__ import annotations
 
-from typing import cast
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -33,9 +31,8 @@ from .._tire.tire import (
 )
 from .._wheel.equilibrium import Status, WheelState, solve_wheel
 from .._wheel.geometry import AbstractWheel
-from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.model import ContactModel, _as_model, _takes_model
 from .._wheel.running import MAX_SLIP_ANGLE
-from .._wheel.shear_law import _shear_law
 
 __all__ = ["TireOnSnowForces", "tire_forces_on_snow"]
 
@@ -208,8 +205,7 @@ def tire_forces_on_snow(
     Example: `snowjax.tire_forces_on_snow(snowjax.RigidWheel.thesis_tire(),
     snowjax.WongSnow.thesis_fresh_snow(), 5000.0, 0.2, 0.1).lateral_force`.
     """
-    terrain, shear, distribution, _, _, terms = _unpack_model(terrain)
-    shear = _shear_law(shear)
+    model = _as_model(terrain)
     if coefficients is not None and parameters is not None:
         raise ValueError("give `coefficients` or `parameters`, not both.")
     if parameters is not None and not isinstance(parameters, TireParameters):
@@ -225,7 +221,6 @@ def tire_forces_on_snow(
     _check("load", load, lambda x: x > 0, "a normal load > 0 N")
     if parameters is not None:
         _check_parameters(parameters)
-    model = ContactModel(cast(Terrain, terrain), distribution, shear, terms=terms)
     state = solve_wheel(wheel, model, load, slip)
     load, slip, slip_angle = (jnp.asarray(x) for x in (load, slip, slip_angle))
     return _combine_jit(state, load, slip, slip_angle, coefficients, parameters)

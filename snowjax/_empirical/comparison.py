@@ -6,11 +6,12 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import cast
 
 import jax.numpy as jnp
 import numpy as np
 
-from .._wheel.model import _takes_model, _unpack_model
+from .._wheel.model import _as_model, _takes_model
 from .common import (
     ICE_DENSITY,
     _positive,
@@ -150,7 +151,8 @@ def compare_motion_resistance(
     radius = diameter / 2
     width = float(wheel.width)
     density = cover.density
-    h0 = float(_unpack_model(wong_snow)[0].z_w) if cover.depth is None else float(cover.depth)
+    wong = _as_model(wong_snow, "wong_snow").terrain
+    h0 = float(cast(WongSnow, wong).z_w) if cover.depth is None else float(cover.depth)
     _positive("snow_depth", h0, "m")
 
     table: dict[str, np.ndarray] = {"load": loads}

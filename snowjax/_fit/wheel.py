@@ -40,8 +40,8 @@ from .._wheel.geometry import AbstractWheel
 from .._wheel.inputs import _check_model
 from .._wheel.inputs import _checks as _wheel_checks
 from .._wheel.lateral import Lateral
-from .._wheel.model import ContactModel, _takes_model, _unpack_model
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.model import ContactModel, _as_model, _takes_model
+from .._wheel.shear_law import AbstractShearLaw
 from .core import (
     FitResult,
     NonFiniteModelError,
@@ -462,20 +462,16 @@ def _status_warnings(status: np.ndarray, m: int) -> list[str]:
 # ---------------------------------------------------------------------------------------
 
 
-def _checked_types(wheel, snow, distribution, lateral, slip_angle, shear):
-    """(distribution, lateral) of `fit_wheel`'s arguments, their types and combination
-    checked (`_check_model`): the front region as None, the lateral law `Lateral()` where
-    a slip angle is given (None without)."""
-    if isinstance(distribution, FrontRegion):  # no leaves: the same as None
-        distribution = None
-    _check_model(wheel, snow, distribution, shear)
-    if lateral is not None and not isinstance(lateral, Lateral):
-        raise TypeError(f"lateral must be None or a snowjax.Lateral, got {type(lateral).__name__}")
-    if slip_angle is not None and lateral is None:
-        lateral = Lateral()
+def _fitted_parts(wheel, model, slip_angle):
+    """(distribution, lateral) of `fit_wheel`'s model, the parts it fits beside the
+    terrain (the wheel / shear law pair checked, `_check_model`): the front region as
+    None (no leaves to fit), the lateral law `Lateral()` where a slip angle is given
+    (None without)."""
+    _check_model(wheel, model)
+    distribution = None if isinstance(model.distribution, FrontRegion) else model.distribution
     if slip_angle is None:
-        lateral = None
-    return distribution, lateral
+        return distribution, None
+    return distribution, Lateral() if model.lateral is None else model.lateral
 
 
 def _fit_warnings(dtype, sol, status, m, names, targets, theta, diameter) -> list[str]:
@@ -656,9 +652,14 @@ def fit_wheel(
     compiles once (about 10 s on a CPU); later fits of the same kind take a fraction of
     a second.
     """
-    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(snow)
-    shear = _shear_law(shear)
-    distribution, lateral = _checked_types(wheel, snow, distribution, lateral, slip_angle, shear)
+    model = _as_model(snow, "snow")
+    snow, shear, nodes_per_panel, terms = (
+        model.terrain,
+        model.shear,
+        model.nodes_per_panel,
+        model.terms,
+    )
+    distribution, lateral = _fitted_parts(wheel, model, slip_angle)
     names, targets = _resolve_fit_names(fit, snow, distribution, lateral, wheel)
     max_steps = check_max_steps(max_steps)
     shear_model = shear

@@ -183,16 +183,16 @@ def _snow_damping_matrix(m, d, wheels, damp, rows):
     return jnp.einsum("kiv,kij,kjw->vw", g, damp, g[:, :3])
 
 
-def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
+def _check_step_args(m, d, wheels, model, speed_eps):
     if not isinstance(m, mjx.Model):
         raise TypeError(f"m must be an mjx.Model (mjx.put_model), got {type(m).__name__}")
     if not isinstance(d, mjx.Data):
         raise TypeError(f"d must be an mjx.Data (mjx.make_data), got {type(d).__name__}")
     if not isinstance(wheels, MjxWheels):
         raise TypeError(f"wheels must be a snowjax.mjx.MjxWheels, got {type(wheels).__name__}")
-    _check_dynamic_shear(shear, "snowjax.mjx")
-    _check_model(wheels.wheel, snow, distribution, shear)
-    _check_parameters(wheels.wheel, snow, distribution, shear)
+    _check_dynamic_shear(model.shear, "snowjax.mjx")
+    _check_model(wheels.wheel, model)
+    _check_parameters(wheels.wheel, model)
     if not (np.isfinite(speed_eps) and speed_eps > 0):
         raise ValueError(f"speed_eps must be finite and > 0 m/s; got {speed_eps!r}")
     if m.opt.integrator != mjx.IntegratorType.EULER:
@@ -206,13 +206,6 @@ def _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution):
         m.nsensordata
     ):
         raise ValueError("wheels do not belong to this model (body or sensor out of range)")
-
-
-def _contact_model(snow):
-    """The `ContactModel` of `step`'s terrain or model, checked (shear, lateral law)."""
-    snow, shear, distribution, lateral, nodes, terms = _steered_model(snow, "snowjax.mjx")
-    model = ContactModel(snow, distribution, shear, lateral, nodes, terms)
-    return snow, shear, distribution, model
 
 
 @_takes_model(positional=5)
@@ -272,8 +265,8 @@ def step(
     `jit`, a wheel whose prescribed load is negative or not finite gets no snow force and
     `Status.INVALID_INPUT`.
     """
-    snow, shear, distribution, contact = _contact_model(snow)
-    _check_step_args(m, d, wheels, snow, shear, speed_eps, distribution)
+    contact = _steered_model(snow, "snowjax.mjx")
+    _check_step_args(m, d, wheels, contact, speed_eps)
     if isinstance(load, str) and load != "contact":
         raise ValueError(f"load must be None, 'contact' or an array of loads [N]; got {load!r}")
     if not isinstance(load, str):
@@ -351,8 +344,8 @@ def rollout(
 
     **Returns:** `Rollout`.
     """
-    _, shear_name, _, contact = _contact_model(snow)
-    _check_step_args(m, d, wheels, contact.terrain, shear_name, speed_eps, contact.distribution)
+    contact = _steered_model(snow, "snowjax.mjx")
+    _check_step_args(m, d, wheels, contact, speed_eps)
     num_steps = int(num_steps)
     if num_steps < 1:
         raise ValueError(f"num_steps must be >= 1; got {num_steps!r}")

@@ -85,9 +85,8 @@ from jaxtyping import Array, ArrayLike, Float, Int
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.geometry import AbstractWheel
 from .._wheel.lateral import Lateral
-from .._wheel.model import _unpack_model
+from .._wheel.model import ContactModel, _as_model
 from .._wheel.passes import _follower_overlap
-from .._wheel.shear_law import _shear_law
 from .vehicle import (
     DEFAULT_SPEED_EPS,
     MAX_MODEL_SLIP_ANGLE,
@@ -228,20 +227,20 @@ class SteeringProfile(eqx.Module):
         return jnp.interp(t, self.times, self.values)
 
 
-def _steered_model(snow, who):
-    """(terrain, shear law, distribution, lateral law, nodes per panel, terms) of a steered
-    wheel's terrain or `ContactModel` (`simulate_planar`, `snowjax.mjx`): the shear law
-    checked to have a lateral counterpart, the lateral law defaulted to `Lateral()`.
-    `who` names the caller in the errors."""
-    snow, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(snow)
-    law = _shear_law(shear)
+def _steered_model(snow, who) -> ContactModel:
+    """The `ContactModel` of a steered wheel's terrain or model (`simulate_planar`,
+    `snowjax.mjx`): its shear law checked to have a lateral counterpart, its lateral law
+    defaulted to `Lateral()`.  `who` names the caller in the errors."""
+    model = _as_model(snow, "snow")
+    law = model.shear
     if not law.lateral:
         raise ValueError(
             f"shear={law.name!r} ({type(law).__name__}) has no lateral counterpart: use "
             f"ContactModel(terrain, shear='classic') (or 'none') with {who}."
         )
-    lateral = Lateral() if lateral is None else lateral
-    return snow, law, distribution, lateral, nodes_per_panel, terms
+    if model.lateral is None:
+        model = eqx.tree_at(lambda m: m.lateral, model, Lateral(), is_leaf=lambda x: x is None)
+    return model
 
 
 def _check_steering_profile(profile: SteeringProfile) -> None:

@@ -13,7 +13,7 @@ term (`_PlanarTerm`) and the shape of the warm start (four wheels) are this modu
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, ClassVar, cast
+from typing import Any, ClassVar
 
 import equinox as eqx
 import jax
@@ -283,17 +283,15 @@ def simulate_planar(
     that cannot be solved even after the retries stops the integration: `result` is set
     (no exception) and the remaining rows hold inf states.
     """
-    snow, shear, distribution, lateral, nodes_per_panel, terms = _steered_model(
-        snow, "simulate_planar"
-    )
+    model = _steered_model(snow, "simulate_planar")
     if not isinstance(vehicle, PlanarVehicle):
         raise TypeError(f"vehicle must be a PlanarVehicle, got {type(vehicle).__name__}")
-    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, initial, stepping)
+    n_steps = _check_run(vehicle.wheel, model, t1, dt, initial, stepping)
     _check_vehicle(vehicle)
     _check_steering(steering)
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, NUM_WHEELS)
-    leaves = jax.tree_util.tree_leaves((vehicle, snow, distribution, lateral))
+    leaves = jax.tree_util.tree_leaves((vehicle, model.terrain, model.distribution, model.lateral))
     dtype = jnp.result_type(*leaves, float)
     speed0 = jnp.asarray(initial.speed, dtype)
     wheel_speed0 = initial.wheel_speed
@@ -327,9 +325,7 @@ def simulate_planar(
     ground = _resolved(ruts, NUM_WHEELS)
     term = _PlanarTerm(
         vehicle=vehicle,
-        contact=ContactModel(
-            cast(Terrain, snow), distribution, shear, lateral, nodes_per_panel, terms
-        ),
+        contact=model,
         steering=steering,
         torque=torque,
         speed_eps=stepping.speed_eps,

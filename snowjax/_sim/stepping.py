@@ -43,7 +43,7 @@ from __future__ import annotations
 
 import abc
 from collections.abc import Callable
-from typing import Any, ClassVar, cast
+from typing import Any, ClassVar
 
 import diffrax
 import equinox as eqx
@@ -56,9 +56,8 @@ from jaxtyping import ArrayLike, Float
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .._wheel.equilibrium import _check_model
-from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.model import ContactModel, _as_model, _takes_model
 from .._wheel.passes import Ruts, _resolved, _VirginGround
-from .._wheel.shear_law import _shear_law
 from .._wheel.status import Status
 from .levenberg_marquardt import _LevenbergMarquardt, _PassiveBlockSolver
 from .options import InitialState, Stepping
@@ -306,7 +305,7 @@ def _integrate(term, y0, n_steps, dt, save_every, adjoint, newton_steps):
     return save_ts, ys, term.unpack(outputs), status, sol.result
 
 
-def _check_run(wheel, snow, distribution, shear, t1, dt, initial, stepping) -> int:
+def _check_run(wheel, model, t1, dt, initial, stepping) -> int:
     """Checks shared by the simulations' entry points; returns the number of steps."""
     if not isinstance(initial, InitialState):
         raise TypeError(f"initial must be a snowjax.InitialState, got {type(initial).__name__}")
@@ -315,14 +314,9 @@ def _check_run(wheel, snow, distribution, shear, t1, dt, initial, stepping) -> i
     for name in ("speed", "wheel_speed", "yaw_rate"):
         value = getattr(initial, name)
         _check_concrete(f"initial.{name}", value, lambda x: np.ones_like(x, bool), "a number")
-    _check_dynamic_shear(shear, "the simulations")
-    if not isinstance(snow, Terrain):
-        raise TypeError(
-            "snow must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, LayeredSnow), "
-            f"got {type(snow).__name__}"
-        )
-    _check_model(wheel, snow, distribution, shear)
-    _check_parameters(wheel, snow, distribution, shear)
+    _check_dynamic_shear(model.shear, "the simulations")
+    _check_model(wheel, model)
+    _check_parameters(wheel, model)
     for name, value in (("t1", t1), ("dt", dt)):
         if not (np.isfinite(value) and value > 0):
             raise ValueError(f"{name} must be finite and > 0; got {value!r}")
@@ -447,11 +441,10 @@ def simulate_longitudinal(
     differentiated they make lineax raise on the non-finite values inside the implicit
     solves, so optimise positive parameters through their logarithms.
     """
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(snow)
-    shear = _shear_law(shear)
+    model = _as_model(snow, "snow")
     if not isinstance(vehicle, Vehicle):
         raise TypeError(f"vehicle must be a snowjax.Vehicle, got {type(vehicle).__name__}")
-    n_steps = _check_run(vehicle.wheel, snow, distribution, shear, t1, dt, initial, stepping)
+    n_steps = _check_run(vehicle.wheel, model, t1, dt, initial, stepping)
     _check_concrete("vehicle.mass", vehicle.mass, lambda x: x > 0, "> 0 kg")
     _check_concrete("vehicle.wheel_inertia", vehicle.wheel_inertia, lambda x: x > 0, "> 0 kg m^2")
     if not (_is_traced(initial.yaw_rate) or np.all(np.asarray(initial.yaw_rate) == 0)):
@@ -464,7 +457,9 @@ def simulate_longitudinal(
         raise ValueError(f"vehicle.num_wheels must be a positive int; got {n!r}")
     if isinstance(torque, TorqueProfile):
         _check_profile(torque, n)
-    dtype = jnp.result_type(vehicle.mass, *jax.tree_util.tree_leaves((snow, distribution)), float)
+    dtype = jnp.result_type(
+        vehicle.mass, *jax.tree_util.tree_leaves((model.terrain, model.distribution)), float
+    )
     speed0 = jnp.asarray(initial.speed, dtype)
     wheel_speed0 = initial.wheel_speed
     if wheel_speed0 is None:
@@ -482,9 +477,7 @@ def simulate_longitudinal(
     ground = _resolved(ruts, n)
     term = _VehicleTerm(
         vehicle=vehicle,
-        contact=ContactModel(
-            cast(Terrain, snow), distribution, shear, None, nodes_per_panel, terms
-        ),
+        contact=model,
         torque=torque,
         speed_eps=stepping.speed_eps,
         max_wheel_steps=64 if stepping.wheel_max_steps is None else stepping.wheel_max_steps,

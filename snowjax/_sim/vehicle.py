@@ -77,7 +77,8 @@ The time stepping of these equations is `stepping.simulate_longitudinal`.
 
 from __future__ import annotations
 
-from typing import Any, cast
+import functools
+from typing import Any
 
 import diffrax
 import equinox as eqx
@@ -90,10 +91,12 @@ from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._terrain.base import Terrain
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import AbstractWheel
-from .._wheel.inputs import _validate_eagerly
-from .._wheel.model import ContactModel, _takes_model, _unpack_model
+from .._wheel.inputs import _check_module_rules, _validate_eagerly
+from .._wheel.lateral import Lateral
+from .._wheel.model import ContactModel, _as_model, _takes_model
 from .._wheel.passes import _VirginGround
 from .._wheel.shear_law import _shear_law
+from .._wheel.terms import _one_term_rules
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -330,11 +333,16 @@ def _check_dynamic_shear(shear, where: str) -> None:
         )
 
 
-def _check_parameters(wheel, snow, distribution, shear) -> None:
-    """`solve_wheel`'s checks of the wheel, terrain and distribution leaves, eagerly (the
-    force functions call `solve_wheel` inside a compiled program, where they are traced):
+def _check_parameters(wheel, model) -> None:
+    """`solve_wheel`'s checks of the wheel's and the model's leaves, eagerly (the force
+    functions call `solve_wheel` inside a compiled program, where they are traced):
     ValueError naming the field of a concrete out-of-range value."""
-    _validate_eagerly(wheel, snow, distribution, np.ones(()), np.zeros(()), shear)
+    terrain, distribution, shear = model.terrain, model.distribution, model.shear
+    dtype = _validate_eagerly(wheel, terrain, distribution, np.ones(()), np.zeros(()), shear)
+    if model.lateral is not None:
+        _check_module_rules(model.lateral, Lateral.constraints, dtype)
+    for k, term in enumerate(model.terms):
+        _check_module_rules(term, functools.partial(_one_term_rules, k), dtype)
 
 
 def _check_concrete(name, value, ok, allowed):
@@ -409,11 +417,10 @@ def wheel_forces(
     range raise `ValueError` naming it; under `jit` invalid elements give
     `Status.INVALID_INPUT` and NaN fields (see `solve_wheel`).
     """
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(snow)
-    shear = _shear_law(shear)
-    _check_dynamic_shear(shear, "wheel_forces")
-    _check_model(wheel, snow, distribution, shear)
-    _check_parameters(wheel, snow, distribution, shear)
+    model = _as_model(snow, "snow")
+    _check_dynamic_shear(model.shear, "wheel_forces")
+    _check_model(wheel, model)
+    _check_parameters(wheel, model)
     _check_concrete("speed", speed, lambda x: np.ones_like(x, bool), "a number [m/s]")
     _check_concrete("wheel_speed", wheel_speed, lambda x: np.ones_like(x, bool), "a number [rad/s]")
     _check_concrete("load", load, lambda x: x > 0, "> 0 N")
@@ -425,7 +432,7 @@ def wheel_forces(
         jnp.asarray(wheel_speed, dtype),
         jnp.asarray(load, dtype),
         wheel,
-        ContactModel(cast(Terrain, snow), distribution, shear, None, nodes_per_panel, terms),
+        model,
         float(speed_eps),
         initial_entry_angle,
         int(max_steps),

@@ -18,7 +18,7 @@ from .._leaves import _get_path, _module_leaves, _parameter_names, _with_leaves
 from .._terrain.base import Terrain
 from .._wheel.distribution import AbstractStressDistribution, FrontRegion
 from .._wheel.geometry import AbstractWheel, RigidWheel
-from .._wheel.shear_law import AbstractShearLaw, _shear_law
+from .._wheel.shear_law import AbstractShearLaw
 
 MANIFEST = "manifest.json"
 _FORMAT_TAG = "snowjax-sweep/1"
@@ -353,29 +353,14 @@ def _term_summary(term) -> dict[str, Any]:
     return {"type": type(term).__name__, "values": [np.asarray(x).tolist() for x in leaves]}
 
 
-def _define(
-    wheel,
-    snow,
-    loads,
-    slips,
-    *,
-    grid,
-    shear,
-    chunk_size,
-    nodes_per_panel,
-    max_steps,
-    distribution=None,
-    terms=(),
-):
+def _define(wheel, model, loads, slips, *, grid, chunk_size, max_steps):
+    """The sweep of `wheel` on `model` (a `ContactModel`, checked when built) over the
+    loads, slips and the varying parameter leaves, checked: `_Definition`."""
     import jax.numpy as jnp
 
     from .._wheel.equilibrium import _check_model
 
-    shear = _shear_law(shear)
-    if nodes_per_panel is not None and (
-        isinstance(nodes_per_panel, bool) or int(nodes_per_panel) < 2
-    ):
-        raise ValueError(f"sweep: nodes_per_panel must be >= 2, got {nodes_per_panel!r}")
+    snow, shear, distribution = model.terrain, model.shear, model.distribution
     if (
         isinstance(chunk_size, bool)
         or not isinstance(chunk_size, (int, np.integer))
@@ -392,7 +377,7 @@ def _define(
     if distribution is not None:
         dist_t, dist_leaves = _leaf_arrays(distribution, AbstractStressDistribution, "distribution")
     try:
-        _check_model(wheel_t, terrain_t, dist_t, shear)
+        _check_model(wheel_t, model)
     except ValueError as err:
         raise ValueError(f"sweep: {err}") from None
     # Wheel leaves by their field names (`diameter`, `inflation_pressure`), the terrain's
@@ -438,7 +423,7 @@ def _define(
         shape=tuple(int(s) for s in shape),
         chunk_size=int(chunk_size),
         shear=shear,
-        nodes_per_panel=None if nodes_per_panel is None else int(nodes_per_panel),
+        nodes_per_panel=model.nodes_per_panel,
         max_steps=int(max_steps),
         dtype=dtype,
         version=VERSION,
@@ -446,5 +431,5 @@ def _define(
         terrain=terrain_t,
         distribution=dist_t,
         names=names,
-        terms=tuple(terms),
+        terms=model.terms,
     )

@@ -69,8 +69,7 @@ from jaxtyping import ArrayLike, Float
 
 from .._terrain.base import Terrain
 from .._wheel.geometry import AbstractWheel
-from .._wheel.model import ContactModel, _takes_model, _unpack_model
-from .._wheel.shear_law import _shear_law
+from .._wheel.model import ContactModel, _as_model, _takes_model
 from .definition import (
     _FORMATS,
     _OUR_FILES,
@@ -445,15 +444,9 @@ def sweep(
         raise TypeError(f"sweep: run must be a snowjax.SweepRun, got {type(run).__name__}")
     given = snow  # the workers get the arguments as given
     chunk_size, devices, callback = run.chunk_size, run.devices, run.callback
-    snow, shear, distribution, _, nodes, terms = _unpack_model(snow)
-    try:
-        shear = _shear_law(shear)
-    except ValueError as err:
-        raise ValueError(f"sweep: {err}") from None
-    d = _define(
-        wheel, snow, loads, slips, grid=grid, shear=shear, chunk_size=chunk_size,
-        nodes_per_panel=nodes, max_steps=max_steps, distribution=distribution, terms=terms,
-    )  # fmt: skip
+    model = _as_model(snow, "snow")
+    snow, distribution = model.terrain, model.distribution
+    d = _define(wheel, model, loads, slips, grid=grid, chunk_size=chunk_size, max_steps=max_steps)
     p_index, p_count = _process(run.process_index, run.process_count)
     custom = (devices, run.process_index, run.process_count, callback)
     n_workers = _worker_count(run.workers, d, (wheel, snow, distribution), (loads, slips), custom)

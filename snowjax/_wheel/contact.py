@@ -29,9 +29,9 @@ from .geometry import (
     AbstractWheel,
     shear_displacement,
 )
-from .model import ContactModel, _takes_model, _unpack_model
+from .model import ContactModel, _as_model, _takes_model
 from .running import _STRAIGHT
-from .shear_law import AbstractShearLaw, ShearModel, _shear_law
+from .shear_law import AbstractShearLaw, ShearModel
 
 # --------------------------------------------------------------------------------------
 # Geometry and stresses (pure functions of scalars or broadcastable arrays)
@@ -117,9 +117,9 @@ def shear_stress(
     """
     from .inputs import _check_model
 
-    law = _shear_law(shear)
-    _check_model(wheel, snow, distribution, law)
-    distribution = _as_distribution(distribution)
+    model = ContactModel(snow, distribution, shear)  # checks the parts and the combination
+    _check_model(wheel, model)
+    law, distribution = model.shear, model.distribution
     contact = type(wheel).contact(wheel, jnp.asarray(entry_angle), snow)
     if _closed_form_rule(snow, distribution, wheel):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
@@ -182,16 +182,15 @@ def contact_forces(
 
     **Returns:** `ContactForces` with fields in N (torque in N m).
     """
-    snow, shear, distribution, _, nodes_per_panel, terms = _unpack_model(snow)
-    law = _shear_law(shear)
     from .inputs import _check_model
 
-    _check_model(wheel, snow, distribution, law)
-    distribution = _as_distribution(distribution)
+    model = _as_model(snow, "snow")
+    _check_model(wheel, model)
+    snow, law, distribution = model.terrain, model.shear, model.distribution
     rule = _contact_rule(snow, distribution, wheel, _STRAIGHT)
-    n = type(rule).nodes(rule, law, nodes_per_panel)  # unbound: see `solve_wheel`
+    n = type(rule).nodes(rule, law, model.nodes_per_panel)  # unbound: see `solve_wheel`
     return _contact_forces_jit(
-        wheel, snow, distribution, terms, entry_angle, slip, law, n, _layout(slip), rule
+        wheel, snow, distribution, model.terms, entry_angle, slip, law, n, _layout(slip), rule
     )
 
 

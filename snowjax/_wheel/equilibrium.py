@@ -39,7 +39,6 @@ from .._leaves import _is_traced
 from .._terrain.base import Terrain
 from .bracketed import solve_elementwise
 from .contact import _broadcast_leaves, _contact_batch, _layout, _with_rule_for
-from .distribution import _as_distribution
 from .front_rim import _contact_rule
 from .geometry import AbstractWheel
 from .inputs import (
@@ -55,10 +54,9 @@ from .inputs import (
     _validate_eagerly,
 )
 from .lateral import Lateral
-from .model import ContactModel, _takes_model, _unpack_model
+from .model import ContactModel, _as_model, _takes_model
 from .root import _implicit_root, _root_outputs
 from .running import _STRAIGHT, AbstractRunning, SlipAngle, _angle_rules, _default_lateral
-from .shear_law import _shear_law
 from .start import _balance_residual, _theta_from_s
 from .status import Status, _throw_on_failure
 from .terms import _one_term_rules, _term_rules
@@ -427,12 +425,12 @@ def solve_wheel(
     terrains and Wong–Reece: see the README section "Every terrain law, two stress
     distributions".
     """
-    terrain, shear, distribution, lateral, nodes_per_panel, terms = _unpack_model(terrain)
-    shear = _shear_law(shear)
+    model = _as_model(terrain)
+    terrain, shear, distribution = model.terrain, model.shear, model.distribution
+    lateral, terms = model.lateral, model.terms
     if not isinstance(throw, bool):
         raise TypeError(f"throw must be True or False, got {throw!r}")
-    _check_model(wheel, terrain, distribution, shear)
-    distribution = _as_distribution(distribution)
+    _check_model(wheel, model)
     _check_options(max_steps)
     load = _numeric_argument("load", load)
     slip = _numeric_argument("slip", slip)
@@ -477,7 +475,7 @@ def solve_wheel(
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
     # every eager call.  The rule travels as its class: a module among the arguments
     # costs the compiled function's dispatch ~5 us per call (flattened and hashed).
-    nodes = type(rule).nodes(rule, shear, nodes_per_panel)
+    nodes = type(rule).nodes(rule, shear, model.nodes_per_panel)
     options = (shear, nodes, int(max_steps), type(rule))
     layout = _layout(slip, warm_start=rule.warm_layout and initial_entry_angle is not None)
     state = _solve_jit(

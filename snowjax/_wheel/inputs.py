@@ -14,8 +14,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from .._leaves import _is_traced, _module_leaves
-from .._terrain.base import Terrain
-from .distribution import AbstractStressDistribution, _as_distribution, _is_front
+from .distribution import _as_distribution, _is_front
 from .geometry import AbstractWheel, _plain_rim
 from .shear_law import _shear_law
 
@@ -187,9 +186,9 @@ def _per_module(table: dict, module, compute, key=()):
     reused across calls (a simulation, a sweep), and at batch 1 each of these eager steps
     costs tens of microseconds.  Weak references make a reused id of a dead object a
     miss."""
-    entry = table.get((id(module), key))
-    if entry is not None and entry[0]() is module:
-        return entry[1]
+    ref, value = table.get((id(module), key), _MISS)
+    if ref() is module:
+        return value
     value = compute(module)
     leaves = jax.tree_util.tree_leaves(module)
     if all(isinstance(x, jax.Array) and not _is_traced(x) for x in leaves):
@@ -199,6 +198,7 @@ def _per_module(table: dict, module, compute, key=()):
     return value
 
 
+_MISS = (lambda: _MISS, None)  # a dead reference: the value to compute
 _VALID_MODULES: dict = {}  # modules whose rules passed, per working dtype
 _LEAF_SHAPES: dict = {}  # the shapes of a module's leaves
 _CONCRETE: dict = {}  # a module's leaf key and its copy with NumPy leaves
@@ -325,26 +325,15 @@ def _valid_mask(wheel, terrain, distribution, load, slip, shear):
     return valid
 
 
-def _check_model(wheel, terrain, distribution, shear) -> None:
-    """Type checks and the refused terrain / distribution / shear combinations."""
-    law = _shear_law(shear)  # ValueError for an unknown shear law, before the type checks
+def _check_model(wheel, model) -> None:
+    """The wheel's type and the refused wheel / shear law pairs (a `ContactModel` checks
+    its own parts, and the terrain / distribution / shear law combination, when built)."""
     if not isinstance(wheel, AbstractWheel):
         raise TypeError(
             "wheel must be a snowjax.RigidWheel, snowjax.DeflectingTire or another "
             f"snowjax.AbstractWheel, got {type(wheel).__name__}"
         )
-    if not isinstance(terrain, Terrain):
-        raise TypeError(
-            "terrain must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
-            f"LayeredSnow), got {type(terrain).__name__}"
-        )
-    distribution = _as_distribution(distribution)
-    if not isinstance(distribution, AbstractStressDistribution):
-        raise TypeError(
-            "distribution must be None, snowjax.FrontRegion(), snowjax.WongReece or another "
-            f"snowjax.AbstractStressDistribution, got {type(distribution).__name__}"
-        )
-    type(law).check(law, terrain, distribution)  # unbound: an equinox bound method is slow
+    law = model.shear
     if not _plain_rim(wheel) and law.nodes_any_terrain is None:
         raise ValueError(
             f"shear={law.name!r} ({type(law).__name__}) is derived for a rigid rim: use "

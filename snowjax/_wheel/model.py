@@ -20,7 +20,8 @@ import equinox as eqx
 import numpy as np
 
 from .._terrain.base import AbstractTerrain
-from .distribution import AbstractStressDistribution, _as_distribution, _is_front
+from .distribution import AbstractStressDistribution, _as_distribution
+from .inputs import _per_module
 from .lateral import Lateral
 from .shear_law import AbstractShearLaw, _shear_law
 from .terms import AbstractForceTerm, _check_terms
@@ -97,31 +98,27 @@ class ContactModel(eqx.Module):
         type(self.shear).check(self.shear, self.terrain, self.distribution)
 
 
-def _unpack_model(terrain: Any) -> tuple[Any, Any, Any, Any, Any, tuple]:
-    """(terrain, shear, distribution, lateral, nodes_per_panel, terms) of a
-    `ContactModel`; a bare terrain is `ContactModel(terrain)`'s defaults (its checks are
-    left to the caller's, which name the argument)."""
-    if not isinstance(terrain, ContactModel):
-        return terrain, "classic", None, None, None, ()
-    model = terrain
-    # The front region as None, the spelling the functions' defaults use (one compiled
-    # program for both spellings).
-    distribution = None if _is_front(model.distribution) else model.distribution
-    return (
-        model.terrain,
-        model.shear,
-        distribution,
-        model.lateral,
-        model.nodes_per_panel,
-        model.terms,
-    )
-
-
-def _with_terrain(model: Any, terrain: AbstractTerrain) -> Any:
-    """A terrain or `ContactModel` with its terrain replaced by `terrain` (e.g. a `Rut`
-    of it): the model's other parts kept, unchecked (the solver checks the pair)."""
-    if not isinstance(model, ContactModel):
+def _as_model(terrain: Any, name: str = "terrain") -> ContactModel:
+    """The `ContactModel` given, or `ContactModel(terrain)` for a bare terrain (built once
+    per terrain object whose leaves are concrete JAX arrays); a `TypeError` naming the
+    argument `name` for anything else.  The model is passed down unchanged from here."""
+    if isinstance(terrain, ContactModel):
         return terrain
+    if not isinstance(terrain, AbstractTerrain):
+        raise TypeError(
+            f"{name} must be a snowjax terrain (WongSnow, BekkerSoil, ReeceSoil, "
+            f"LayeredSnow, or a law of your own) or a snowjax.ContactModel, got "
+            f"{type(terrain).__name__}"
+        )
+    return _per_module(_MODELS, terrain, ContactModel)
+
+
+_MODELS: dict = {}  # the default model of a bare terrain
+
+
+def _with_terrain(model: ContactModel, terrain: AbstractTerrain) -> ContactModel:
+    """`model` with its terrain replaced by `terrain` (e.g. a `Rut` of it): the model's
+    other parts kept, unchecked (the solver checks the pair)."""
     return eqx.tree_at(lambda m: m.terrain, model, terrain)
 
 

@@ -25,7 +25,7 @@ from .._terrain.rut import Rut
 from .._terrain.rut_map import RutMap, _check_modulus
 from .equilibrium import solve_wheel
 from .geometry import AbstractWheel
-from .model import ContactModel, _takes_model, _unpack_model, _with_terrain
+from .model import ContactModel, _as_model, _takes_model, _with_terrain
 
 __all__ = ["PassResult", "PathResult", "Ruts", "drive_path", "multi_pass", "track_offset"]
 
@@ -72,7 +72,8 @@ def multi_pass(
     **Returns:** a `PassResult`.  Differentiable in every input (the rut's state is a
     running maximum: its derivative follows the pass that set it).
     """
-    model, virgin = terrain, _unpack_model(terrain)[0]
+    model = _as_model(terrain)
+    virgin = model.terrain
     loads = jnp.asarray(loads, float)
     slips = jnp.broadcast_to(jnp.asarray(slip, loads.dtype), loads.shape)
     z_max = jnp.zeros(loads.shape[:-1], loads.dtype)
@@ -371,12 +372,13 @@ def drive_path(
         traced = _is_traced(diameter)
         lookahead = jnp.max(diameter) / 2 if traced else float(np.max(np.asarray(diameter))) / 2
     rut_map.check_lookahead(lookahead)  # (a traced one is not checked)
-    return _drive_path(wheel, terrain, rut_map, positions, headings, loads, slip, lookahead)
+    model = _as_model(terrain)
+    return _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahead)
 
 
 @eqx.filter_jit
 def _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahead):
-    terrain = _unpack_model(model)[0]
+    terrain = model.terrain
     positions = jnp.asarray(positions, float)
     steps, n = positions.shape[:2]
     headings = jnp.broadcast_to(jnp.asarray(headings, positions.dtype), (steps, n))
