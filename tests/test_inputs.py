@@ -166,3 +166,23 @@ class Drag(sj.AbstractForceTerm):
 
     def forces(self, nodes):
         return sj.Resultants(motion_resistance=self.pressure * nodes.radius * 0.3)
+
+
+def test_what_the_checks_remember_goes_with_the_parameters():
+    """The eager checks remember per parameter object; a collected object's entries go
+    with it, and the default models of bare terrains are bounded (16)."""
+    import gc
+
+    from snowjax._wheel import inputs, model
+
+    before = set(inputs._CONCRETE)  # other tests' distributions still alive
+    for _ in range(40):
+        dist = sj.WongReece(jnp.asarray(0.43), jnp.asarray(0.32))
+        snow = sj.WongSnow.thesis_fresh_snow()
+        sj.solve_wheel(WHEEL, sj.ContactModel(snow, dist), 4e3, 0.3)
+        sj.solve_wheel(WHEEL, snow, 4e3, 0.3)
+        assert id(dist) in {k for k, _ in inputs._CONCRETE}
+    del dist, snow
+    gc.collect()
+    assert set(inputs._CONCRETE) <= before  # every distribution here was collected
+    assert len(model._MODELS) <= 16

@@ -180,21 +180,23 @@ def _validate_eagerly(wheel, terrain, distribution, load, slip, shear) -> np.dty
     return dtype
 
 
-def _per_module(table: dict, module, compute, key=()):
+def _per_module(table: dict, module, compute, key=(), limit: int = 256):
     """`compute(module)`, remembered in `table` per module object (and `key`) when the
     module's leaves are concrete JAX arrays (immutable): parameter sets are usually
     reused across calls (a simulation, a sweep), and at batch 1 each of these eager steps
-    costs tens of microseconds.  Weak references make a reused id of a dead object a
-    miss."""
+    costs tens of microseconds.  An entry goes when its module is collected (a weak
+    reference's callback), and the table is emptied at `limit` entries (a value that
+    holds its module keeps it alive until then)."""
     ref, value = table.get((id(module), key), _MISS)
     if ref() is module:
         return value
     value = compute(module)
     leaves = jax.tree_util.tree_leaves(module)
     if all(isinstance(x, jax.Array) and not _is_traced(x) for x in leaves):
-        if len(table) >= 256:
+        if len(table) >= limit:
             table.clear()
-        table[(id(module), key)] = (weakref.ref(module), value)
+        entry = (id(module), key)
+        table[entry] = (weakref.ref(module, lambda _: table.pop(entry, None)), value)
     return value
 
 
