@@ -232,7 +232,8 @@ def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     from mujoco import mjx
 
     import snowjax.mjx as smjx
-    from snowjax._mjx.step import _contact_model, _snow_forces
+    from snowjax._mjx.step import _snow_forces
+    from snowjax._sim.planar import _steered_model
 
     model, wheels = smjx.load_rover()
     m = mjx.put_model(model)
@@ -245,7 +246,7 @@ def test_mjx_snow_forces_put_the_rear_wheels_in_the_front_wheels_ruts():
     def forces(d):
         d = mjx.fwd_velocity(m, mjx.fwd_position(m, d))
         load = wheels.static_load
-        contact = _contact_model(SNOW)[-1]
+        contact = _steered_model(SNOW, "the test")
         return _snow_forces(m, d, wheels, contact, None, load, 0.05, ruts)[-1]
 
     out = jax.tree.map(np.asarray, forces(d))

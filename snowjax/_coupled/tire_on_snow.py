@@ -183,8 +183,9 @@ def tire_forces_on_snow(
       [`snowjax.ContactModel`][]: the shear model of the chapter-4 equilibrium
       (`JanosiHanamoto()` / `"classic"` (4.11), `ThesisSimplified()` / `"simplified"`
       (4.13) or `NoShear()` / `"none"`; see [`snowjax.solve_wheel`][]), the stress
-      distribution (the front region, [`snowjax.WongReece`][] or another) and force
-      terms.
+      distribution (the front region, [`snowjax.WongReece`][] or another), the nodes
+      per panel and force terms (its lateral law is not used: the equilibrium is solved at
+      zero slip angle, above).
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [−1, 1]: 0 free rolling, 1 spinning in place,
       negative braking.
