@@ -186,3 +186,10 @@ def test_what_the_checks_remember_goes_with_the_parameters():
     gc.collect()
     assert set(inputs._CONCRETE) <= before  # every distribution here was collected
     assert len(model._MODELS) <= 16
+
+
+def test_the_per_point_stresses_name_a_wrong_terrain():
+    with pytest.raises(TypeError, match="snow must be a snowjax terrain, got float"):
+        sj.shear_stress(0.1, 0.3, 0.2, WHEEL, 3.0)
+    with pytest.raises(TypeError, match="snow must be a snowjax terrain"):
+        sj.contact_forces(WHEEL, "snow", 0.3, 0.2)

@@ -117,6 +117,8 @@ def shear_stress(
     """
     from .inputs import _check_model
 
+    if not isinstance(snow, AbstractTerrain):
+        raise TypeError(f"snow must be a snowjax terrain, got {type(snow).__name__}")
     model = ContactModel(snow, distribution, shear)  # checks the parts and the combination
     _check_model(wheel, model)
     law, distribution = model.shear, model.distribution
