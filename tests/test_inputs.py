@@ -193,3 +193,19 @@ def test_the_per_point_stresses_name_a_wrong_terrain():
         sj.shear_stress(0.1, 0.3, 0.2, WHEEL, 3.0)
     with pytest.raises(TypeError, match="snow must be a snowjax terrain"):
         sj.contact_forces(WHEEL, "snow", 0.3, 0.2)
+
+
+def test_defaults_first_built_inside_jit_do_not_leak_tracers():
+    """The default lateral law and a bare terrain's default model are built once and
+    kept: first built inside `jax.jit`, they must hold concrete arrays, not tracers."""
+    from snowjax._wheel import model, running
+
+    running._default_lateral.cache_clear()
+    snow = sj.WongSnow.thesis_fresh_snow()
+    model._MODELS.clear()
+    traced = jax.jit(lambda load: sj.solve_wheel(WHEEL, snow, load, 0.3, slip_angle=0.1))
+    inside = traced(4e3).drawbar_pull
+    eager = sj.solve_wheel(WHEEL, snow, 4e3, 0.3, slip_angle=0.1).drawbar_pull
+    np.testing.assert_allclose(eager, inside, rtol=1e-12)
+    assert not any(isinstance(x, jax.core.Tracer) for x in jax.tree_util.tree_leaves(
+        (running._default_lateral(True), model._as_model(snow))))  # fmt: skip

@@ -17,6 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 import equinox as eqx
+import jax
 import numpy as np
 
 from .._terrain.base import AbstractTerrain
@@ -110,7 +111,8 @@ def _as_model(terrain: Any, name: str = "terrain") -> ContactModel:
             f"LayeredSnow, or a law of your own) or a snowjax.ContactModel, got "
             f"{type(terrain).__name__}"
         )
-    return _per_module(_MODELS, terrain, ContactModel, limit=16)
+    with jax.ensure_compile_time_eval():  # no tracer in the cached model (inside jit)
+        return _per_module(_MODELS, terrain, ContactModel, limit=16)
 
 
 # The default model of a bare terrain (building one costs ~40 us).  The model holds its

@@ -137,6 +137,9 @@ _STRAIGHT = Straight()
 
 @functools.lru_cache(maxsize=2)
 def _default_lateral(x64: bool) -> Lateral:
-    """`Lateral()`, built once per precision mode (building it costs ~30 us per call)."""
+    """`Lateral()`, built once per precision mode (building it costs ~30 us per call).
+    Its leaves are concrete even when first asked for inside `jax.jit` (a tracer kept in
+    the cache would leak into every later call)."""
     del x64  # the cache key: the fields' dtype follows jax_enable_x64
-    return Lateral()
+    with jax.ensure_compile_time_eval():
+        return Lateral()
