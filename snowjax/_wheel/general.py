@@ -306,7 +306,8 @@ def general_contact(
 
 class AnyTerrainRule(AbstractContactRule):
     """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
-    by a scan of W over entry angles (`start._scan_start`)."""
+    from W at two entry angles, or a scan of W for a law whose pressure can fall
+    (`start._scan_start`)."""
 
     warm_layout: ClassVar[bool] = False
 
