@@ -1,8 +1,8 @@
 """Where the solver starts: its variable s (theta0 = theta_cap exp(-s^2)), the bracket
 [s_min, S_MAX], a warm start from a previous entry angle, and the any-terrain start, W
 at two entry angles or a scan of W (`_scan_start`); `front_rim.py` has the closed-form
-start of a terrain that offers closed forms of its rim integrals.  See `equilibrium.py` for the
-solver itself.
+start of a terrain that offers closed forms of its rim integrals.  See `equilibrium.py`
+for the solver itself.
 """
 
 from __future__ import annotations
