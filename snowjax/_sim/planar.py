@@ -78,15 +78,16 @@ from typing import Any
 
 import diffrax
 import equinox as eqx
+import jax
 import jax.numpy as jnp
 import numpy as np
 from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._wheel.geometry import AbstractWheel
-from .._wheel.lateral import Lateral
 from .._wheel.model import ContactModel, _as_model
 from .._wheel.passes import _follower_overlap
+from .._wheel.running import _default_lateral
 from .vehicle import (
     DEFAULT_SPEED_EPS,
     MAX_MODEL_SLIP_ANGLE,
@@ -239,7 +240,8 @@ def _steered_model(snow, who) -> ContactModel:
             f"ContactModel(terrain, shear='classic') (or 'none') with {who}."
         )
     if model.lateral is None:
-        model = eqx.tree_at(lambda m: m.lateral, model, Lateral(), is_leaf=lambda x: x is None)
+        lateral = _default_lateral(bool(jax.config.read("jax_enable_x64")))
+        model = eqx.tree_at(lambda m: m.lateral, model, lateral, is_leaf=lambda x: x is None)
     return model
 
 

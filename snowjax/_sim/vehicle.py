@@ -77,7 +77,6 @@ The time stepping of these equations is `stepping.simulate_longitudinal`.
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
 import diffrax
@@ -91,12 +90,10 @@ from .._leaves import _as_float, _check_real_leaves, _is_traced
 from .._terrain.base import Terrain
 from .._wheel.equilibrium import _check_model, solve_wheel
 from .._wheel.geometry import AbstractWheel
-from .._wheel.inputs import _check_module_rules, _validate_eagerly
-from .._wheel.lateral import Lateral
+from .._wheel.inputs import _check_lateral_and_terms, _validate_eagerly
 from .._wheel.model import ContactModel, _as_model, _takes_model
 from .._wheel.passes import _VirginGround
 from .._wheel.shear_law import _shear_law
-from .._wheel.terms import _one_term_rules
 
 __all__ = [
     "STANDARD_GRAVITY",
@@ -339,10 +336,7 @@ def _check_parameters(wheel, model) -> None:
     ValueError naming the field of a concrete out-of-range value."""
     terrain, distribution, shear = model.terrain, model.distribution, model.shear
     dtype = _validate_eagerly(wheel, terrain, distribution, np.ones(()), np.zeros(()), shear)
-    if model.lateral is not None:
-        _check_module_rules(model.lateral, Lateral.constraints, dtype)
-    for k, term in enumerate(model.terms):
-        _check_module_rules(term, functools.partial(_one_term_rules, k), dtype)
+    _check_lateral_and_terms(model.lateral, model.terms, dtype)
 
 
 def _check_concrete(name, value, ok, allowed):

@@ -43,8 +43,8 @@ from .front_rim import _contact_rule
 from .geometry import AbstractWheel
 from .inputs import (
     _broadcast_shape,
+    _check_lateral_and_terms,
     _check_model,
-    _check_module_rules,
     _check_options,
     _check_rules,
     _fits,
@@ -53,13 +53,12 @@ from .inputs import (
     _valid_mask,
     _validate_eagerly,
 )
-from .lateral import Lateral
 from .model import ContactModel, _as_model, _takes_model
 from .root import _implicit_root, _root_outputs
 from .running import _STRAIGHT, AbstractRunning, SlipAngle, _angle_rules, _default_lateral
 from .start import _balance_residual, _theta_from_s
 from .status import Status, _throw_on_failure
-from .terms import _one_term_rules, _term_rules
+from .terms import _term_rules
 
 __all__ = ["Status", "WheelState", "solve_wheel", "MAX_ENTRY_ANGLE"]
 
@@ -468,9 +467,8 @@ def solve_wheel(
     if isinstance(running, SlipAngle):  # the slip angle; its lateral law once per object
         angle = slip_angle if _is_traced(slip_angle) else np.asarray(slip_angle)
         _check_rules(_angle_rules(angle), dtype, *_magnitude_window(dtype))
-        _check_module_rules(running.lateral, Lateral.constraints, dtype)
-    for k, term in enumerate(terms):
-        _check_module_rules(term, functools.partial(_one_term_rules, k), dtype)
+    lateral = running.lateral if isinstance(running, SlipAngle) else None
+    _check_lateral_and_terms(lateral, terms, dtype)
     rule = _contact_rule(terrain, distribution, wheel, running)
     # Unbound calls: an equinox bound method costs ~40 us to create, and this runs on
     # every eager call.  The rule travels as its class: a module among the arguments

@@ -16,7 +16,9 @@ import numpy as np
 from .._leaves import _is_traced, _module_leaves
 from .distribution import _as_distribution, _is_front
 from .geometry import AbstractWheel, _plain_rim
+from .lateral import Lateral
 from .shear_law import _shear_law
+from .terms import _one_term_rules
 
 # ---------------------------------------------------------------------------------------
 # Input validation
@@ -216,6 +218,15 @@ def _check_module_rules(module, rules_of, dtype) -> None:
         _check_rules(rules, dtype, *_magnitude_window(dtype))
 
     _per_module(_VALID_MODULES, module, check, dtype)
+
+
+def _check_lateral_and_terms(lateral, terms, dtype) -> None:
+    """The rules of a model's lateral law (None: none) and force terms, once per object
+    (`_check_module_rules`)."""
+    if isinstance(lateral, Lateral):
+        _check_module_rules(lateral, Lateral.constraints, dtype)
+    for k, term in enumerate(terms):
+        _check_module_rules(term, functools.partial(_one_term_rules, k), dtype)
 
 
 def _to_numpy(x):
