@@ -382,13 +382,14 @@ def test_a_contact_model_traces_the_same_simulation():
     lateral law (compared as jaxprs: no compile needed); the keywords that moved into the
     model, `InitialState` and `Stepping` raise a `TypeError` naming their new spelling."""
     lateral = sj.Lateral(shear_modulus=0.02)
+    default = sj.Lateral()  # built outside the trace, as the cached default is
 
     def run(snow, **keywords):
         return simulate_planar(VEHICLE, snow, 0.1, 100.0, 0.2, 0.1, **keywords).x
 
     # A bare terrain is ContactModel(terrain) with the default lateral law, Lateral().
     bare = jax.make_jaxpr(lambda s: run(s))(FRESH)
-    by_model = jax.make_jaxpr(lambda s: run(sj.ContactModel(s, lateral=sj.Lateral())))(FRESH)
+    by_model = jax.make_jaxpr(lambda s: run(sj.ContactModel(s, lateral=default)))(FRESH)
     assert str(by_model) == str(bare)
     with_law = jax.make_jaxpr(lambda s: run(sj.ContactModel(s, lateral=lateral)))(FRESH)
     assert str(with_law) != str(bare)
