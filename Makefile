@@ -39,6 +39,7 @@ test-all: test test-slow
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/run.py $(ARGS)
+	$(BIN)/python benchmarks/accuracy.py $(ARGS)
 	$(BIN)/python benchmarks/mjx.py $(ARGS)
 	$(BIN)/python benchmarks/ruts.py $(ARGS)
 

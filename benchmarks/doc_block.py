@@ -13,6 +13,7 @@ GUIDE = pathlib.Path(__file__).resolve().parents[1] / "docs" / "guide"
 PAGES = {
     "benchmarks": "performance.md",
     "mjx-benchmarks": "performance.md",
+    "accuracy": "performance.md",
     "rut-benchmarks": "performance.md",
     "robustness": "reliability.md",
 }

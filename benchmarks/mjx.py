@@ -16,7 +16,8 @@ rollouts from that state:
   joint damping explicit, see `rollouts`);
 - `snowjax.mjx.step`: the same MJX pipeline plus the four wheels' snow forces (warm-started
   equilibria with slip angle, their forward-mode slopes, the wheel Jacobians and the
-  implicit update).
+  implicit update), at the reference accuracy and at the simulator accuracy
+  (`ContactModel(accuracy="simulator")`).
 
 The snowjax cost is the difference.  1,024 and 4,096 environments vmap the rollout, each
 environment on its own snow (p_w 60-200 kPa).  `--device gpu` runs on the GPU in float32
@@ -86,23 +87,26 @@ def rollouts(m, wheels, d0, steps):
         d = d0.replace(qpos=d0.qpos + 0.0 * p_w)  # same signature as `snow`
         return jax.lax.scan(body, d, None, length=steps)[1]
 
-    def snow(p_w):
+    def snow(p_w, accuracy="reference"):
         terrain = sj.WongSnow(p_w, base.z_w, base.cohesion, base.tan_phi, base.shear_modulus)
-        return smjx.rollout(m, d0, wheels, terrain, d0.ctrl, steps).qvel[:, 0]
+        model = sj.ContactModel(terrain, accuracy=accuracy)
+        return smjx.rollout(m, d0, wheels, model, d0.ctrl, steps).qvel[:, 0]
 
-    return plain, snow
+    return plain, snow, lambda p_w: snow(p_w, "simulator")
 
 
 def measure(batch, steps, m, wheels, d0):
-    """Seconds per step of both rollouts for `batch` environments; the compile times [s]."""
-    plain, snow = rollouts(m, wheels, d0, steps)
+    """Seconds per step of the rollouts (MJX alone, with snow at the reference and at the
+    simulator accuracy) for `batch` environments; the compile times [s]."""
+    plain, snow, snow_simulator = rollouts(m, wheels, d0, steps)
+    fns = {"plain": plain, "snow": snow, "simulator": snow_simulator}
     if batch == 1:
         p_w = jnp.asarray(85.55e3, d0.qpos.dtype)
-        runs = {"plain": jax.jit(plain), "snow": jax.jit(snow)}
+        runs = {name: jax.jit(fn) for name, fn in fns.items()}
     else:
         rng = np.random.default_rng(0)
         p_w = jnp.asarray(np.exp(rng.uniform(np.log(60e3), np.log(200e3), batch)), d0.qpos.dtype)
-        runs = {"plain": jax.jit(jax.vmap(plain)), "snow": jax.jit(jax.vmap(snow))}
+        runs = {name: jax.jit(jax.vmap(fn)) for name, fn in fns.items()}
     out = {}
     for name, fn in runs.items():
         t = time.perf_counter()
@@ -138,14 +142,17 @@ def main(argv=None):
         r = measure(batch, steps, m, wheels, d0)
         t_mjx, t_all = r["plain"][0], r["snow"][0]
         t_wheels = t_all - t_mjx
-        rows.append((batch, steps, t_mjx, t_all, t_wheels, t_wheels / n, r["snow"][1]))
+        t_simulator = r["simulator"][0] - t_mjx
+        row = (batch, steps, t_mjx, t_all, t_wheels, t_wheels / n, r["snow"][1], t_simulator)
+        rows.append(row)
 
     head = (
         "| environments | steps timed | MJX env-steps/s | MJX + snowjax env-steps/s |"
         " MJX step | MJX + snowjax step | snowjax wheel forces per step (per wheel) |"
-        " wheel forces / MJX step | first-call compile (MJX + snowjax) |"
+        " wheel forces / MJX step | the same at the simulator accuracy |"
+        " first-call compile (MJX + snowjax) |"
     )
-    lines = [head, "|---|---|---|---|---|---|---|---|---|"]
+    lines = [head, "|---|---|---|---|---|---|---|---|---|---|"]
     platform = jax.default_backend().upper()
     precision = "float64" if jax.config.jax_enable_x64 else "float32"
     table = Table(title=f"snowjax rover in MJX ({precision}, 4 wheels, {platform})")
@@ -158,6 +165,7 @@ def main(argv=None):
         "MJX+snowjax",
         "wheels (per wheel)",
         "ratio",
+        "ratio (simulator)",
         "compile",
     ):
         table.add_column(col)
@@ -168,7 +176,7 @@ def main(argv=None):
             f"{seconds * 1e3:.2f} ms ({per_env:.1f} µs/env)" if batch > 1 else f"{per_env:.0f} µs"
         )
 
-    for batch, steps, t_mjx, t_all, t_wheels, t_wheel, compile_s in rows:
+    for batch, steps, t_mjx, t_all, t_wheels, t_wheel, compile_s, t_simulator in rows:
         cells = (
             f"{batch:,}",
             str(steps),
@@ -178,6 +186,7 @@ def main(argv=None):
             us(t_all, batch),
             f"{us(t_wheels, batch)} ({t_wheel / batch * 1e6:.1f} µs/wheel)",
             f"{t_wheels / t_mjx:.2f}",
+            f"{t_simulator / t_mjx:.2f}",
             f"{compile_s:.1f} s",
         )
         lines.append("| " + " | ".join(cells) + " |")
@@ -195,7 +204,8 @@ def main(argv=None):
             f"* {precision}; the shipped rover (16 dofs, 4 wheels); env-steps/s = environments"
             " x MJX steps (5 ms) per second.  Wheel forces = (MJX + snowjax step) - (MJX step):"
             " the four equilibria with their slip angles, their forward-mode slopes, the wheel"
-            " Jacobians and the implicit update.",
+            " Jacobians and the implicit update; at the simulator accuracy"
+            ' (`ContactModel(terrain, accuracy="simulator")`) with fewer quadrature nodes.',
         ]
     )
     if not args.no_docs:

@@ -384,6 +384,29 @@ def test_a_contact_model_traces_the_same_step(rover):
         forces(SNOW, distribution=plate)
 
 
+@pytest.mark.slow  # the rover's step compiled at two accuracies (make test-slow)
+def test_the_simulator_accuracy_step_is_within_1e_4_of_the_reference(rover):
+    """One step, driving and steered at 2 m/s: every wheel's forces at the simulator
+    accuracy within 1e-4 of the wheel's load (moments: of load x r) of the reference
+    accuracy's, and not equal to them (the setting reaches the wheels)."""
+    _, m, wheels, d0 = rover
+    d = d0.replace(
+        qvel=_moving(rover, 2.0, 0.2), ctrl=smjx.rover_controls(0.1, jnp.full(4, TORQUE))
+    )
+    out = {
+        a: smjx.step(m, d, wheels, sj.ContactModel(SNOW, accuracy=a))[1]
+        for a in ("reference", "simulator")
+    }
+    load = np.asarray(out["reference"].load)
+    diffs = {
+        name: np.abs(np.asarray(getattr(out["simulator"], name) - getattr(out["reference"], name)))
+        / (load * (RADIUS if "torque" in name else 1.0))
+        for name in ("longitudinal_force", "lateral_force", "resisting_torque", "aligning_torque")
+    }
+    assert max(float(x.max()) for x in diffs.values()) <= 1e-4, diffs
+    assert float(diffs["lateral_force"].max()) > 0, diffs
+
+
 def test_bad_input_raises(rover):
     model, m, wheels, d0 = rover
     with pytest.raises(ValueError, match="no body named"):
@@ -424,3 +447,5 @@ def test_bad_input_raises(rover):
         smjx.step(m, d0, wheels, sj.ContactModel(SNOW, shear="simplified"))
     with pytest.raises(ValueError, match="episode_length"):
         smjx.SnowRoverEnv(episode_length=0)
+    with pytest.raises(ValueError, match="accuracy must be one of"):
+        smjx.SnowRoverEnv(accuracy="fast")

@@ -176,6 +176,12 @@ def _run_arguments(p) -> None:
         " (the chunk files are always kept) (default %(default)s)",
     )
     p.add_argument("--nodes-per-panel", type=int, default=None, help="quadrature nodes per panel")
+    p.add_argument(
+        "--accuracy",
+        choices=("reference", "simulator"),
+        default="reference",
+        help="quadrature: reference (1e-7) or simulator (fewer nodes; up to 3e-4 of the load)",
+    )
     p.add_argument("--max-steps", type=int, default=64, help="Newton iteration limit")
     p.add_argument("--float32", action="store_true", help="solve in float32 (default float64)")
     p.add_argument("--restart", action="store_true", help="discard a sweep already in --out")
@@ -550,7 +556,13 @@ def run(args) -> int:
         n_sets = max([1, *(np.size(x) for x in jax.tree_util.tree_leaves((wheel, snow)))])
         n_points = len(loads) if args.list else len(loads) * len(slips) * n_sets
         _check_output_size(args.out, n_points, formats)
-        model = ContactModel(snow, distribution, args.shear, nodes_per_panel=args.nodes_per_panel)
+        model = ContactModel(
+            snow,
+            distribution,
+            args.shear,
+            nodes_per_panel=args.nodes_per_panel,
+            accuracy=args.accuracy,
+        )
         result = sweep(
             wheel,
             model,

@@ -105,6 +105,7 @@ class _WheelResidual(eqx.Module):
     shear: AbstractShearLaw = eqx.field(static=True)
     nodes_per_panel: int | None = eqx.field(static=True)
     solve_max_steps: int = eqx.field(static=True)
+    accuracy: str = eqx.field(static=True, default="reference")
     # (owner, field path) of each fitted variable; owner "terrain", "distribution",
     # "lateral" or "wheel".
     targets: tuple = eqx.field(static=True, default=())
@@ -122,7 +123,9 @@ class _WheelResidual(eqx.Module):
             distribution = _with_leaves(distribution, new["distribution"])
         if lateral is not None:
             lateral = _with_leaves(lateral, new["lateral"])
-        model = ContactModel(snow, distribution, self.shear, lateral, self.nodes_per_panel, terms)
+        model = ContactModel(
+            snow, distribution, self.shear, lateral, self.nodes_per_panel, terms, self.accuracy
+        )
         st = solve_wheel(
             wheel, model, load, slip, slip_angle=slip_angle, max_steps=self.solve_max_steps
         )
@@ -620,8 +623,8 @@ def fit_wheel(
       - `lateral`: a `snowjax.Lateral` (default `Lateral()` when a `slip_angle` is
         given); its leaves are fitted as `lateral.shear_modulus` (give it a value to
         fit it) and `lateral.unit_weight`; `bulldozing` is held;
-      - `nodes_per_panel` and `terms` (force terms of your own, held at their values),
-        as in `solve_wheel`.
+      - `nodes_per_panel`, `accuracy` and `terms` (force terms of your own, held at
+        their values), as in `solve_wheel`.
     - `load`: F_z [N] (> 0), one per data point (several loads allowed).
     - `slip`: driving slip i [-] in [-1, 1], same length.
     - `measured`: the measured values by quantity, a mapping with at least one of
@@ -688,6 +691,7 @@ def fit_wheel(
         shear=shear_model,
         nodes_per_panel=None if nodes_per_panel is None else int(nodes_per_panel),
         solve_max_steps=int(solve_max_steps),
+        accuracy=model.accuracy,
         targets=targets,
     )
     u0 = np.array([
@@ -730,7 +734,13 @@ def fit_wheel(
             "lateral": fitted_lateral,
             "wheel": fitted_wheel,
             "model": ContactModel(
-                fitted_snow, fitted_dist, shear, fitted_lateral, nodes_per_panel, terms
+                fitted_snow,
+                fitted_dist,
+                shear,
+                fitted_lateral,
+                nodes_per_panel,
+                terms,
+                model.accuracy,
             ),
             "transforms": {nm: "log" if log else "linear" for nm, log in zip(names, transform.log)},
             "predictions": {q: np.asarray(pred[k]) for k, q in enumerate(quantities)},

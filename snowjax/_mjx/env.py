@@ -15,6 +15,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
 
 from .._terrain.wong import WongSnow
+from .._wheel.model import ContactModel, _accuracy_option
 from .rover import ROVER_WHEELS, load_rover, rover_controls
 from .step import step as snow_step
 from .wheels import MjxWheels, mjx, mujoco
@@ -117,13 +118,16 @@ class SnowRoverEnv:
         goal_bonus: float = 5.0,
         model: mujoco.MjModel | None = None,
         wheels: MjxWheels | None = None,
+        accuracy: str = "reference",
     ):
         """**Arguments:** `ranges`: `SnowRanges` (default `SnowRanges()`); the task's
         settings above (`episode_length`, `frame_skip`: ints >= 1; `max_steer` in
         (0, 0.6) rad; `max_torque` > 0 N m; `goal_distance` (low, high) [m], 0 < low <=
         high; `goal_bearing` [rad]; `goal_radius` [m], `goal_bonus` [-]); `model` and
         `wheels`: the rover on another ground (`load_rover(slope=...)` or
-        `load_rover(heights=...)`), default the flat floor.
+        `load_rover(heights=...)`), default the flat floor; `accuracy`: the contact
+        model's (`ContactModel(snow, accuracy=...)`: `"reference"` or `"simulator"`, fewer
+        quadrature nodes; the performance guide has its error and speed).
 
         **Raises:** `ValueError` for settings out of range."""
         if int(episode_length) < 1 or int(frame_skip) < 1:
@@ -151,6 +155,7 @@ class SnowRoverEnv:
         self.goal_bearing = float(goal_bearing)
         self.goal_radius = float(goal_radius)
         self.goal_bonus = float(goal_bonus)
+        self.accuracy = _accuracy_option(accuracy)
 
     @property
     def observation_size(self) -> int:
@@ -204,9 +209,8 @@ class SnowRoverEnv:
 
         def frame(carry, _):
             data, theta = carry
-            data, out = snow_step(
-                self.model, data.replace(ctrl=ctrl), self.wheels, info["snow"], theta
-            )
+            snow = ContactModel(info["snow"], accuracy=self.accuracy)
+            data, out = snow_step(self.model, data.replace(ctrl=ctrl), self.wheels, snow, theta)
             theta = jax.lax.stop_gradient(
                 jnp.where(jnp.isfinite(out.entry_angle), out.entry_angle, theta)
             )

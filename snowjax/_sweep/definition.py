@@ -179,6 +179,7 @@ class _Definition:
     distribution: Any
     names: dict[str, tuple[str, str]]  # column -> (owner, field path) of each leaf
     terms: tuple = ()  # the model's own force terms (the same in every row)
+    accuracy: str = "reference"  # the model's accuracy setting
 
     @property
     def n_chunks(self) -> int:
@@ -278,6 +279,8 @@ class _Definition:
             # sweeps without them keep their hash).
             **({"terms": [_term_summary(t) for t in self.terms]} if self.terms else {}),
             "nodes_per_panel": self.nodes_per_panel,
+            # The simulator accuracy (the reference: no key, so such sweeps keep their hash).
+            **({"accuracy": self.accuracy} if self.accuracy != "reference" else {}),
             "max_steps": self.max_steps,
             "dtype": self.dtype.name,
             "columns": list(self.columns),
@@ -432,4 +435,5 @@ def _define(wheel, model, loads, slips, *, grid, chunk_size, max_steps):
         distribution=dist_t,
         names=names,
         terms=model.terms,
+        accuracy=model.accuracy,
     )

@@ -136,7 +136,13 @@ class _Solver:
                 }
             wheel, terrain, distribution = self.d.build(x)
             model = ContactModel(
-                terrain, distribution, self.d.shear, None, self.d.nodes_per_panel, self.d.terms
+                terrain,
+                distribution,
+                self.d.shear,
+                None,
+                self.d.nodes_per_panel,
+                self.d.terms,
+                self.d.accuracy,
             )
             states.append(
                 solve_wheel(wheel, model, x["load"], x["slip"], max_steps=self.d.max_steps)

@@ -321,6 +321,10 @@ class FrontRimRule(AbstractContactRule):
     def uniform_nodes(self, n: int) -> tuple:
         return (n, (n,) * 4)
 
+    def simulator_nodes(self, law) -> tuple:
+        """The law's `nodes_simulator` (its closed-form count) on every panel."""
+        return type(self).uniform_nodes(self, law.nodes_simulator[0])
+
     def prepare_slip(self, slip):
         return _flush_tiny_slip(slip)
 

@@ -320,6 +320,12 @@ class AnyTerrainRule(AbstractContactRule):
     def uniform_nodes(self, n: int) -> tuple:
         return (n, n)
 
+    def simulator_nodes(self, law) -> tuple:
+        """The law's `nodes_simulator` (its any-terrain count) on every half-panel."""
+        type(self).law_nodes(self, law)  # a ValueError for a law without this rule
+        n = law.nodes_simulator[1]
+        return (n, n)
+
     def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
         del slip, wheel, shear
         return _scan_start(vertical, theta_cap, load, terrain)

@@ -42,6 +42,17 @@ def _nodes_option(nodes_per_panel):
     return int(nodes_per_panel)
 
 
+ACCURACIES = ("reference", "simulator")
+
+
+def _accuracy_option(accuracy):
+    if not isinstance(accuracy, str):
+        raise TypeError(f"accuracy must be one of {ACCURACIES}, got {accuracy!r}")
+    if accuracy not in ACCURACIES:
+        raise ValueError(f"accuracy must be one of {ACCURACIES}, got {accuracy!r}")
+    return accuracy
+
+
 class ContactModel(eqx.Module):
     """The wheel–terrain contact: what the wheel runs on and how its stresses are modelled.
 
@@ -63,6 +74,13 @@ class ContactModel(eqx.Module):
     - `terms`: force terms of your own (`AbstractForceTerm`s, one method each: their
       part of W, R, T, M, F_y, M_z at the contact's nodes), added to the built-in ones
       (normal stress, shear, lateral shear, bulldozing, a tyre's flexing); default none.
+    - `accuracy` (static): `"reference"` (default: every contact integral within 1e-7
+      of adaptive quadrature) or `"simulator"`, for vehicle simulations and RL: fewer
+      quadrature nodes (the shear law's `nodes_simulator`: 6 per panel of Wong snow's
+      closed-form rule, 8 per half-panel of the any-terrain rule, against 10 and 12-16),
+      for errors up to ~3e-4 of the load and ~1e-8 typically (the worst and median over
+      random cases of every law, and the speed it buys, are in the performance guide).
+      `nodes_per_panel`, where given, sets the nodes instead.
 
     A module like the terrain: its array leaves (the terrain's and the distribution's
     parameters, `Lateral`'s moduli) broadcast, vmap and differentiate, e.g.
@@ -80,6 +98,10 @@ class ContactModel(eqx.Module):
     lateral: Lateral | None = None
     nodes_per_panel: int | None = eqx.field(static=True, converter=_nodes_option, default=None)
     terms: tuple[AbstractForceTerm, ...] = eqx.field(converter=_check_terms, default=())
+    accuracy: str = eqx.field(
+        static=True, converter=_accuracy_option, default="reference",
+        metadata=dict(choices=ACCURACIES),
+    )  # fmt: skip
 
     def __check_init__(self):
         if not isinstance(self.terrain, AbstractTerrain):

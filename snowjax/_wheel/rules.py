@@ -24,9 +24,10 @@ __all__: list[str] = []
 class AbstractContactRule(eqx.Module):
     """A contact rule (no fields; static in the compiled programs).
 
-    - `nodes(law, nodes_per_panel)`: the quadrature nodes per panel, `(driving,
-      braking)`: the law's own table for the rule (`law_nodes`) or, given
-      `nodes_per_panel`, that many on every panel (`uniform_nodes`).
+    - `nodes(law, nodes_per_panel, accuracy)`: the quadrature nodes per panel,
+      `(driving, braking)`: the law's own table for the rule (`law_nodes`), at the
+      simulator accuracy the law's `nodes_simulator` on every panel (`simulator_nodes`),
+      or, given `nodes_per_panel`, that many on every panel (`uniform_nodes`).
     - `prepare_slip(slip)`: the slips as the rule's layout needs them.
     - `start(vertical, theta_cap, load, slip, wheel, terrain, shear)`: (over, target,
       lower, upper, s0) of the solver (`start.py`); `warm_start(vertical, theta_cap,
@@ -41,11 +42,13 @@ class AbstractContactRule(eqx.Module):
 
     warm_layout: ClassVar[bool] = False
 
-    def nodes(self, law, nodes_per_panel: int | None) -> tuple:
+    def nodes(self, law, nodes_per_panel: int | None, accuracy: str = "reference") -> tuple:
         # Unbound calls: an equinox bound method costs ~40 us to create (every eager call).
-        if nodes_per_panel is None:
-            return type(self).law_nodes(self, law)
-        return type(self).uniform_nodes(self, nodes_per_panel)
+        if nodes_per_panel is not None:
+            return type(self).uniform_nodes(self, nodes_per_panel)
+        if accuracy == "simulator":
+            return type(self).simulator_nodes(self, law)
+        return type(self).law_nodes(self, law)
 
     @abc.abstractmethod
     def law_nodes(self, law) -> tuple:
@@ -53,6 +56,10 @@ class AbstractContactRule(eqx.Module):
 
     @abc.abstractmethod
     def uniform_nodes(self, n: int) -> tuple:
+        raise NotImplementedError
+
+    @abc.abstractmethod
+    def simulator_nodes(self, law) -> tuple:
         raise NotImplementedError
 
     def prepare_slip(self, slip):

@@ -76,6 +76,12 @@ class AbstractShearLaw(eqx.Module):
     #: Default nodes per half-panel of the any-terrain rule (without, with braking); None:
     #: the law has no any-terrain rule.
     nodes_any_terrain: ClassVar[tuple[int, int] | None] = (12, 16)
+    #: Nodes at the simulator accuracy (`ContactModel(accuracy="simulator")`): on every
+    #: panel of the closed-form rule, and on every half-panel of the any-terrain rule
+    #: (None: no any-terrain rule).  Their error against adaptive quadrature over the
+    #: random cases of every law is measured by `benchmarks/accuracy.py` (the
+    #: performance guide's table).
+    nodes_simulator: ClassVar[tuple[int, int | None]] = (6, 8)
 
     def __init_subclass__(cls, **kwargs):
         super().__init_subclass__(**kwargs)
@@ -215,6 +221,7 @@ class ThesisSimplified(AbstractShearLaw):
     # The cubic exponent makes its shear layer steeper than the classic law's: more
     # nodes (measured worst case 3e-9 driving against adaptive quadrature).
     nodes_closed_form: ClassVar = (24, (16, 16, 16, 16))
+    nodes_simulator: ClassVar = (8, None)
 
     def check(self, terrain, distribution) -> None:
         """`ValueError` unless the terrain is `WongSnow` on the front region."""
