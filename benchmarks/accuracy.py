@@ -32,7 +32,6 @@ import argparse
 import math
 import pathlib
 import sys
-import time
 import warnings
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
@@ -47,7 +46,7 @@ from doc_block import add_no_docs, write_block  # noqa: E402
 from rich.console import Console  # noqa: E402
 from rich.progress import track  # noqa: E402
 from rich.table import Table  # noqa: E402
-from run import machine  # noqa: E402
+from run import best_time, machine  # noqa: E402
 from scipy import integrate, optimize  # noqa: E402
 
 import snowjax as sj  # noqa: E402
@@ -70,16 +69,6 @@ def _solve(wheel, terrain, dist, lateral, load, slip, beta, accuracy):
     model = sj.ContactModel(terrain, distribution=dist, lateral=lateral, accuracy=accuracy)
     st = sj.solve_wheel(wheel, model, load, slip, slip_angle=beta)
     return {f: np.asarray(getattr(st, f)) for f in (*OUTPUTS, "entry_angle", "status")}
-
-
-def _time(fn, repeats=3):
-    fn()  # compiled
-    best = math.inf
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 def _law(kind, terrain, k):
@@ -162,7 +151,11 @@ def family(kind, wong_reece, steered, n, n_scipy, seed):
     vs_reference = np.stack(
         [np.abs(sim_st[f] - ref_st[f])[both] / s[both] for f, s in zip(OUTPUTS, scales)], 1
     )
-    times = [_time(lambda a=a: _solve(*args, a)["status"]) for a in ("reference", "simulator")]
+    times = []
+    for accuracy in ("reference", "simulator"):
+        run = lambda a=accuracy: _solve(*args, a)  # noqa: E731
+        run()  # compiled
+        times.append(best_time(run, 3))
     scipy_errors = []
     if not (steered and kind == "layered"):
         with warnings.catch_warnings():

@@ -386,13 +386,13 @@ def test_a_contact_model_traces_the_same_step(rover):
 
 @pytest.mark.slow  # the rover's step compiled at two accuracies (make test-slow)
 def test_the_simulator_accuracy_step_is_within_1e_4_of_the_reference(rover):
-    """One step, driving and steered at 2 m/s: every wheel's forces at the simulator
-    accuracy within 1e-4 of the wheel's load (moments: of load x r) of the reference
-    accuracy's, and not equal to them (the setting reaches the wheels)."""
+    """One step, driving at 2 m/s and sliding sideways at 0.3 m/s (slip angles 0.15 rad):
+    every wheel's forces at the simulator accuracy within 1e-4 of the wheel's load
+    (moments: of load x r) of the reference accuracy's, and not equal to them (the
+    setting reaches the wheels)."""
     _, m, wheels, d0 = rover
-    d = d0.replace(
-        qvel=_moving(rover, 2.0, 0.2), ctrl=smjx.rover_controls(0.1, jnp.full(4, TORQUE))
-    )
+    qvel = _moving(rover, 2.0, 0.2).at[1].set(0.3)
+    d = d0.replace(qvel=qvel, ctrl=smjx.rover_controls(0.0, jnp.full(4, TORQUE)))
     out = {
         a: smjx.step(m, d, wheels, sj.ContactModel(SNOW, accuracy=a))[1]
         for a in ("reference", "simulator")
@@ -404,7 +404,7 @@ def test_the_simulator_accuracy_step_is_within_1e_4_of_the_reference(rover):
         for name in ("longitudinal_force", "lateral_force", "resisting_torque", "aligning_torque")
     }
     assert max(float(x.max()) for x in diffs.values()) <= 1e-4, diffs
-    assert float(diffs["lateral_force"].max()) > 0, diffs
+    assert min(float(diffs[k].max()) for k in ("longitudinal_force", "lateral_force")) > 0, diffs
 
 
 def test_bad_input_raises(rover):

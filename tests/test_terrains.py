@@ -240,6 +240,27 @@ def test_equilibrium_matches_brentq(kind, wong_reece):
         assert float(st.torque[k]) == pytest.approx(m, rel=1e-7)
 
 
+def test_layered_snow_finds_the_shallowest_equilibrium_below_a_narrow_peak():
+    """W(theta0) on a crust peaks where the deepest point reaches the failure sinkage;
+    the start evaluates W there, so a load just below the peak balances above it.  A
+    random case (`tests/random_cases.py`, seed 7, case 69) where a start scanning 48
+    fixed angles missed the peak and returned a root 42 % deeper (z0 0.149 m against
+    SciPy's 0.105 m)."""
+    top = sj.WongSnow(57873.53, 0.1084075, 1482.880, 0.1843108, 0.01466066)
+    bottom = sj.WongSnow(75845.99, 0.2015356, 1482.880, 0.1843108, 0.01466066)
+    terrain = sj.LayeredSnow(top, bottom, 210665.7)
+    wheel, load, slip = sj.RigidWheel(0.7150040, 0.3730875), 8930.097, 0.3326788
+    st = sj.solve_wheel(wheel, terrain, load, slip)
+    assert int(st.status) == Status.CONVERGED
+    law, z_f = _ref_law(terrain)
+    c, tp, K = _strength(terrain)
+    theta0, _ = ref.solve(
+        load, slip, 0.7150040, 0.3730875, law, c, tp, K, 0.0, 0.0, z_f=z_f,
+        depth=float(terrain.depth), shallowest=True, lower=_strength(terrain, "bottom"),
+    )  # fmt: skip
+    assert float(st.entry_angle) == pytest.approx(theta0, rel=1e-9)
+
+
 @pytest.mark.slow  # batches over every law (make test-slow)
 def test_done_means_batched_loads_slips_parameter_sets():
     """The documented call, batched over parameter sets x loads x slips, for every terrain."""

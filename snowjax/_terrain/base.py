@@ -111,8 +111,9 @@ class AbstractTerrain(eqx.Module):
     def pressure_rises(self) -> bool:
         """Whether the pressure never falls as the sinkage grows (static).  Default: a
         law without breakpoints; a law with breakpoints may drop at one (`LayeredSnow`'s
-        ice failure), so `solve_wheel`'s cold start scans it densely for the shallowest
-        equilibrium.  A law with kinks only (`Rut`) says True."""
+        ice failure), so `solve_wheel`'s cold start also evaluates W where the contact's
+        deepest sinkage reaches each breakpoint (W's local maxima) to bracket the
+        shallowest equilibrium.  A law with kinks only (`Rut`) says True."""
         return not self.breakpoint_sinkages()
 
     def front_rim_integrals(

@@ -5,7 +5,7 @@ stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (N
 kept inside a bracket, `BracketedNewton`): one solver (`_solve_layout`) for every
 terrain, stress distribution, shear law and slip angle, which takes its contact
 integrals and its start from the contact rule (`rules.py`: the any-terrain rule, whose
-start is a scan of W, or the closed-form accelerations of `front_rim.py` where the
+start is W at a few entry angles, or the closed-form accelerations of `front_rim.py` where the
 terrain offers them, started from the closed-form no-shear balance).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
@@ -171,7 +171,7 @@ def _solve_layout(
         )
 
     if guess is None:
-        start = rule.start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+        start = rule.start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear)
     else:
         start = rule.warm_start(vertical, theta_cap, load, slip, guess, wheel, terrain)
     over, target, lower, upper, s0 = start
@@ -392,7 +392,7 @@ def solve_wheel(
     - `max_steps`: Newton iteration limit.
     - `initial_entry_angle`: optional warm start theta0 [rad] (broadcasts like `load`),
       e.g. the previous time step's `entry_angle` inside a simulation; it replaces the
-      initial guess (and, for other terrains, the initial scan of W).  Non-finite or
+      initial guess (and, for other terrains, W at the start's entry angles).  Non-finite or
       non-positive values fall back to half the largest admissible entry angle.  It
       carries no gradient.  For a `LayeredSnow` whose W(theta0) is not monotone, a warm
       start continues from the previous root instead of taking the shallowest one.

@@ -328,7 +328,8 @@ class FrontRimRule(AbstractContactRule):
     def prepare_slip(self, slip):
         return _flush_tiny_slip(slip)
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+        del distribution  # the front region
         return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):

@@ -304,9 +304,21 @@ def general_contact(
     return total.vertical_load if vertical_only else total.astuple()
 
 
+def _deepest_stress_angle(distribution, slip, theta0):
+    """The stress angle [rad] nearest the axle at entry angle theta0 [rad]: where the
+    law meets the contact's deepest sinkage (0 on the front region, theta_m under
+    Wong–Reece), the least of the stress angles at the axle (clipped into the contact)
+    and at the distribution's breakpoints."""
+    axle = jnp.clip(jnp.zeros_like(theta0), distribution.exit_angle(theta0, slip), theta0)
+    points = (axle, *distribution.breakpoints(theta0, slip))
+    return functools.reduce(
+        jnp.minimum, [jnp.abs(distribution.stress_angle(p, theta0, slip)) for p in points]
+    )
+
+
 class AnyTerrainRule(AbstractContactRule):
     """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
-    from W at two entry angles, or a scan of W for a law whose pressure can fall
+    from W at two entry angles, and at the breakpoints of a law whose pressure can fall
     (`start._scan_start`)."""
 
     warm_layout: ClassVar[bool] = False
@@ -326,9 +338,10 @@ class AnyTerrainRule(AbstractContactRule):
         n = law.nodes_simulator[1]
         return (n, n)
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
-        del slip, wheel, shear
-        return _scan_start(vertical, theta_cap, load, terrain)
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+        del shear
+        deepest = functools.partial(_deepest_stress_angle, distribution, slip)
+        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest)
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         del slip, wheel, terrain

@@ -29,7 +29,8 @@ class AbstractContactRule(eqx.Module):
       simulator accuracy the law's `nodes_simulator` on every panel (`simulator_nodes`),
       or, given `nodes_per_panel`, that many on every panel (`uniform_nodes`).
     - `prepare_slip(slip)`: the slips as the rule's layout needs them.
-    - `start(vertical, theta_cap, load, slip, wheel, terrain, shear)`: (over, target,
+    - `start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear)`:
+      (over, target,
       lower, upper, s0) of the solver (`start.py`); `warm_start(vertical, theta_cap,
       load, slip, guess, wheel, terrain)` the same from a previous entry angle `guess`.
     - `contact(contact, slip, terrain, distribution, law, n, running, braking,
@@ -66,7 +67,7 @@ class AbstractContactRule(eqx.Module):
         return slip
 
     @abc.abstractmethod
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, shear):
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
         raise NotImplementedError
 
     @abc.abstractmethod

@@ -1,8 +1,8 @@
 """Where the solver starts: its variable s (theta0 = theta_cap exp(-s^2)), the bracket
 [s_min, S_MAX], a warm start from a previous entry angle, and the any-terrain start, W
-at two entry angles or a scan of W (`_scan_start`); `front_rim.py` has the closed-form
-start of a terrain that offers closed forms of its rim integrals.  See `equilibrium.py`
-for the solver itself.
+at two entry angles and, on a law that can fall, at its breakpoints (`_scan_start`);
+`front_rim.py` has the closed-form start of a terrain that offers closed forms of its
+rim integrals.  See `equilibrium.py` for the solver itself.
 """
 
 from __future__ import annotations
@@ -67,18 +67,6 @@ def _warm_start(guess, theta_cap):
     return jax.lax.stop_gradient(jnp.clip(s, s_min, S_MAX))
 
 
-def _scan_grid(dtype):
-    """Solver variable s at which a law whose pressure can fall (`AbstractTerrain.
-    pressure_rises` False: `LayeredSnow`, whose W(theta0) can fall after the ice breaks)
-    scans W before Newton (increasing: deep to shallow): s^2 from S_MIN^2 to S_MAX^2 in
-    steps of 2 plus 39 points with theta0 / theta_cap evenly spaced in [0.1, 1] (steps of
-    0.023), which resolve the crust's peak; a peak narrower than that can be missed (then
-    a deeper root is returned)."""
-    s2 = np.linspace(_s_min(dtype) ** 2, S_MAX**2, 9)
-    s2 = np.unique(np.concatenate([s2, -np.log(np.linspace(0.1, 1.0, 40)[:-1])]))
-    return jnp.asarray(np.sqrt(np.sort(s2)), dtype)
-
-
 def _warm_bracket_start(vertical, theta_cap, load, guess):
     """(over, target, lower, upper, s0) of a warm start from a previous entry angle
     `guess` (any terrain): the bracket is the whole range and the capacity W at s_min."""
@@ -93,7 +81,7 @@ def _warm_bracket_start(vertical, theta_cap, load, guess):
 S_MID = float(np.sqrt(8.0))
 
 
-def _scan_start(vertical, theta_cap, load, terrain):
+def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest):
     """(over, target, lower, upper, s0) from W at a few entry angles (any terrain).
 
     A law whose pressure rises with depth (`AbstractTerrain.pressure_rises`): W is
@@ -102,14 +90,25 @@ def _scan_start(vertical, theta_cap, load, terrain):
     the root in [s_min, S_MID] or [S_MID, S_MAX], and ln W linear in s^2 through both
     (exact for a power law; extrapolated beyond S_MID) gives s0.  A third point at s^2 =
     16, which this start once also evaluated, changed no result beyond 1e-11 relative
-    and cost 4-9 % of the any-terrain solves.  Otherwise (`LayeredSnow`) W is scanned on
-    `_scan_grid` and the shallowest grid interval where W crosses the load brackets the
-    root (the shallowest equilibrium), interpolated the same way.
+    and cost 4-9 % of the any-terrain solves.
+
+    A law whose pressure can fall at a breakpoint (`LayeredSnow`, where the ice breaks):
+    the solver wants the shallowest equilibrium, and W is no longer monotone.  W rises
+    while the contact's deepest sinkage stays above a breakpoint, peaks when it reaches
+    one (`_breakpoint_s`; `deepest(theta0)` the stress angle nearest the axle) and may
+    fall just past it, then rises again.  W at the cap, at e^-8 of it and at every
+    breakpoint's angle (its local maxima) brackets the shallowest crossing of the load
+    between the shallowest grid point that carries it and the next (`_grid_start`).  This replaced
+    a scan of 48 fixed angles, which cost about 80 % of such a solve and could miss a
+    peak between its points (then returning a deeper root).
     """
-    if not terrain.pressure_rises():
-        return _grid_start(vertical, theta_cap, load, _scan_grid(load.dtype))
     dtype = load.dtype
     s_lo = _s_min(dtype)
+    if not terrain.pressure_rises():
+        fixed = [jnp.full_like(load, s) for s in (s_lo, S_MID)]
+        peaks = _breakpoint_s(terrain, diameter, theta_cap, deepest)
+        s_grid = jnp.sort(jnp.stack(fixed + peaks), axis=0)
+        return _grid_start(vertical, theta_cap, load, jax.lax.stop_gradient(s_grid))
     w_lo, w_mid = (
         vertical(_theta_from_s(jnp.full_like(load, s), theta_cap)) for s in (s_lo, S_MID)
     )
@@ -124,6 +123,45 @@ def _scan_start(vertical, theta_cap, load, terrain):
     return over, target, lower, upper, jnp.sqrt(s0_squared)
 
 
+def _breakpoint_s(terrain, diameter, theta_cap, deepest):
+    """The solver variable s at which the contact's deepest sinkage reaches each of the
+    terrain's breakpoint sinkages z_b [m], less 8 ulp (a tyre's flat breaks through at
+    the breakpoint itself, where W jumps: the point stays on the side before it).
+
+    The deepest sinkage at entry angle theta0 is the undeflected circle's at the stress
+    angle nearest the axle, `deepest(theta0)` (0 on the front region, theta_m under
+    Wong–Reece): D [sin^2(theta0 / 2) - sin^2(deepest / 2)] (4.5), solved for theta0 by
+    Newton from the axle's theta0 = 2 arcsin sqrt(z_b / D) (exact on the front region),
+    within [that, theta_cap].  Kept in [s_min, S_MAX]: a breakpoint beyond the cap gives
+    the cap, one at the surface the shallow end; a cap of 0 (a rut pressed to the base)
+    the cap.
+    """
+    s_lo = _s_min(theta_cap.dtype)
+    eps = float(np.finfo(theta_cap.dtype).eps)
+    positive = theta_cap > 0
+    cap = jnp.where(positive, theta_cap, 1.0)
+
+    def depth_at(theta0):
+        return diameter * (jnp.sin(theta0 / 2) ** 2 - jnp.sin(deepest(theta0) / 2) ** 2)
+
+    out = []
+    for z_b in terrain.breakpoint_sinkages():
+        ratio = jnp.clip(jnp.where(jnp.isfinite(z_b), z_b, 0.0) / diameter, 0.0, 1.0)
+        axle = jnp.minimum(2 * jnp.arcsin(jnp.sqrt(ratio)), cap)
+
+        def newton(_, theta0, z_b=z_b, axle=axle):
+            z, slope = jax.jvp(depth_at, (theta0,), (jnp.ones_like(theta0),))
+            step = jnp.where(slope > 0, (z_b - z) / jnp.where(slope > 0, slope, 1.0), 0.0)
+            return jnp.clip(theta0 + step, axle, cap)
+
+        theta_b = jax.lax.fori_loop(0, 6, newton, axle) * (1 - 8 * eps)
+        relative = jnp.where(positive, theta_b / cap, 1.0)
+        relative = jnp.clip(relative, jnp.exp(-(S_MAX**2)), 1.0)
+        s = jnp.sqrt(jnp.maximum(-jnp.log(relative), 0.0))
+        out.append(jnp.broadcast_to(jnp.clip(s, s_lo, S_MAX), theta_cap.shape))
+    return out
+
+
 def _log_ratio(w, target):
     """ln(W / target), W floored at the smallest normal number (1e-300 is 0 in float32:
     log(0 / target) would be -inf and the interpolation NaN)."""
@@ -131,18 +169,18 @@ def _log_ratio(w, target):
 
 
 def _grid_start(vertical, theta_cap, load, s_grid):
-    """`_scan_start` on the grid `s_grid` (increasing s, deep to shallow)."""
+    """`_scan_start` on the grid `s_grid` of each element (shape (points, batch),
+    increasing s along axis 0, deep to shallow)."""
     points = s_grid.shape[0]
-    w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(
-        jnp.broadcast_to(s_grid[:, None], (points,) + load.shape)
-    )
+    w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(s_grid)
     over = ~jnp.any(w_grid >= load, axis=0)
     target = jnp.where(over, 0.5 * w_grid[0], load)
     carried = w_grid >= target
     # The shallowest grid point that carries the target (largest s), kept <= K - 2.
-    k = jnp.clip(points - 1 - jnp.argmax(carried[::-1], axis=0), 0, points - 2)
-    lower, upper = s_grid[k], s_grid[k + 1]
-    f_lo = _log_ratio(jnp.take_along_axis(w_grid, k[None], 0)[0], target)
-    f_hi = _log_ratio(jnp.take_along_axis(w_grid, k[None] + 1, 0)[0], target)
+    k = jnp.clip(points - 1 - jnp.argmax(carried[::-1], axis=0), 0, points - 2)[None]
+    pick = lambda x, j: jnp.take_along_axis(x, j, 0)[0]  # noqa: E731
+    lower, upper = pick(s_grid, k), pick(s_grid, k + 1)
+    f_lo = _log_ratio(pick(w_grid, k), target)
+    f_hi = _log_ratio(pick(w_grid, k + 1), target)
     frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
     return over, target, lower, upper, jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
