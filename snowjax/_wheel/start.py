@@ -98,9 +98,9 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest):
     one (`_breakpoint_s`; `deepest(theta0)` the stress angle nearest the axle) and may
     fall just past it, then rises again.  W at the cap, at e^-8 of it and at every
     breakpoint's angle (its local maxima) brackets the shallowest crossing of the load
-    between the shallowest grid point that carries it and the next (`_grid_start`).  This replaced
-    a scan of 48 fixed angles, which cost about 80 % of such a solve and could miss a
-    peak between its points (then returning a deeper root).
+    between the shallowest grid point that carries it and the next (`_grid_start`).  A
+    scan of 48 fixed angles, which this start replaced, cost about 80 % of such a solve
+    and could miss a peak between its points (then returning a deeper root).
     """
     dtype = load.dtype
     s_lo = _s_min(dtype)
