@@ -178,7 +178,7 @@ def _run_arguments(p) -> None:
     p.add_argument("--nodes-per-panel", type=int, default=None, help="quadrature nodes per panel")
     p.add_argument(
         "--accuracy",
-        choices=("reference", "simulator"),
+        choices=("reference", "simulator"),  # ContactModel's ACCURACIES (no jax import here)
         default="reference",
         help="quadrature: reference (1e-7) or simulator (fewer nodes; up to 3e-4 of the load)",
     )

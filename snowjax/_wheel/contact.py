@@ -190,9 +190,8 @@ def contact_forces(
     _check_model(wheel, model)
     snow, law, distribution = model.terrain, model.shear, model.distribution
     rule = _contact_rule(snow, distribution, wheel, _STRAIGHT)
-    n = type(rule).nodes(
-        rule, law, model.nodes_per_panel, model.accuracy
-    )  # unbound: see solve_wheel
+    # Unbound: see `solve_wheel`.
+    n = type(rule).nodes(rule, law, model.nodes_per_panel, model.accuracy)
     return _contact_forces_jit(
         wheel, snow, distribution, model.terms, entry_angle, slip, law, n, _layout(slip), rule
     )
