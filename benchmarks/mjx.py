@@ -9,7 +9,7 @@ without the snow's wheel forces.
 Needs the `mjx` extra.  The shipped rover (`snowjax.mjx.load_rover`: free-floating
 chassis, sprung wheels, Ackermann steering, 4 thesis tyres; 16 dofs) starts at 2 m/s with
 its wheels at slip 0.2, steered at 0.1 rad and driven by 540 N m per wheel, on the thesis
-fresh snow (classic shear, `Lateral()`, float64 on the CPU).  Two jitted `lax.scan`
+fresh snow (classic shear, `Lateral()`, float64 on the CPU).  Jitted `lax.scan`
 rollouts from that state:
 
 - `mjx.step`: MuJoCo MJX alone (no snow forces: the wheels spin on a frictionless floor;
@@ -17,7 +17,10 @@ rollouts from that state:
 - `snowjax.mjx.step`: the same MJX pipeline plus the four wheels' snow forces (warm-started
   equilibria with slip angle, their forward-mode slopes, the wheel Jacobians and the
   implicit update), at the reference accuracy and at the simulator accuracy
-  (`ContactModel(accuracy="simulator")`).
+  (`ContactModel(accuracy="simulator")`);
+- `snowjax.mjx.step` on a rut map (`rollout(..., ruts=RutMap.empty(...))`, reference
+  accuracy): each wheel reads the rut ahead of it, solves on that `Rut` and marks its
+  track, on a 10 m x 10 m map of 10 cm cells per environment (`MAP_EXTENT`, `MAP_CELL`).
 
 The snowjax cost is the difference.  1,024 and 4,096 environments vmap the rollout, each
 environment on its own snow (p_w 60-200 kPa).  `--device gpu` runs on the GPU in float32
@@ -55,6 +58,14 @@ TORQUE = 540.0  # [N m] per wheel
 SPEED = 2.0  # [m/s]
 SLIP = 0.2
 STEER = 0.1  # [rad]
+# The rut map of each environment: 10 m x 10 m about the start, 10 cm cells (100 x 100);
+# k_0 [Pa/m] and A_u [Pa/m^2] as in docs/guide/ruts.md (illustrative).
+MAP_EXTENT, MAP_CELL, MAP_K_0, MAP_A_U = (-4.0, 6.0, -5.0, 5.0), 0.1, 1e6, 5e6
+
+
+def rut_map(dtype):
+    """The empty rut map every environment starts on."""
+    return sj.RutMap.empty(MAP_EXTENT, MAP_CELL, MAP_K_0, MAP_A_U, dtype=dtype)
 
 
 def start(m, wheels):
@@ -68,7 +79,8 @@ def start(m, wheels):
 
 
 def rollouts(m, wheels, d0, steps):
-    """(plain MJX, MJX + snowjax) rollouts of `steps` steps, functions of p_w [Pa]."""
+    """(plain MJX, MJX + snowjax, at the simulator accuracy, on a rut map) rollouts of
+    `steps` steps, functions of p_w [Pa]."""
     base = sj.WongSnow.thesis_fresh_snow()
 
     # MJX alone integrates the joints' damping explicitly: with MuJoCo's implicit damping,
@@ -87,19 +99,21 @@ def rollouts(m, wheels, d0, steps):
         d = d0.replace(qpos=d0.qpos + 0.0 * p_w)  # same signature as `snow`
         return jax.lax.scan(body, d, None, length=steps)[1]
 
-    def snow(p_w, accuracy="reference"):
+    def snow(p_w, accuracy="reference", on_map=False):
         terrain = sj.WongSnow(p_w, base.z_w, base.cohesion, base.tan_phi, base.shear_modulus)
         model = sj.ContactModel(terrain, accuracy=accuracy)
-        return smjx.rollout(m, d0, wheels, model, d0.ctrl, steps).qvel[:, 0]
+        grid = rut_map(d0.qpos.dtype) if on_map else None
+        return smjx.rollout(m, d0, wheels, model, d0.ctrl, steps, ruts=grid).qvel[:, 0]
 
-    return plain, snow, lambda p_w: snow(p_w, "simulator")
+    return plain, snow, lambda p_w: snow(p_w, "simulator"), lambda p_w: snow(p_w, on_map=True)
 
 
 def measure(batch, steps, m, wheels, d0):
     """Seconds per step of the rollouts (MJX alone, with snow at the reference and at the
-    simulator accuracy) for `batch` environments; the compile times [s]."""
-    plain, snow, snow_simulator = rollouts(m, wheels, d0, steps)
-    fns = {"plain": plain, "snow": snow, "simulator": snow_simulator}
+    simulator accuracy, with snow on a rut map) for `batch` environments; the compile
+    times [s]."""
+    plain, snow, snow_simulator, snow_map = rollouts(m, wheels, d0, steps)
+    fns = {"plain": plain, "snow": snow, "simulator": snow_simulator, "map": snow_map}
     if batch == 1:
         p_w = jnp.asarray(85.55e3, d0.qpos.dtype)
         runs = {name: jax.jit(fn) for name, fn in fns.items()}
@@ -137,7 +151,7 @@ def main(argv=None):
     cases = ((1, 100 if quick else 400), (1024, 3 if quick else 10), (4096, 2 if quick else 5))
     if args.device == "gpu":  # a GPU fills at larger batches
         cases += ((16384, 2 if quick else 5), (65536, 2 if quick else 5))
-    rows = []
+    rows, map_rows = [], []
     for batch, steps in track(cases, description="MJX rollouts", transient=True):
         r = measure(batch, steps, m, wheels, d0)
         t_mjx, t_all = r["plain"][0], r["snow"][0]
@@ -145,6 +159,7 @@ def main(argv=None):
         t_simulator = r["simulator"][0] - t_mjx
         row = (batch, steps, t_mjx, t_all, t_wheels, t_wheels / n, r["snow"][1], t_simulator)
         rows.append(row)
+        map_rows.append((batch, steps, t_all, r["map"][0]))
 
     head = (
         "| environments | steps timed | MJX env-steps/s | MJX + snowjax env-steps/s |"
@@ -193,6 +208,7 @@ def main(argv=None):
         table.add_row(*cells)
     console = Console()
     console.print(table)
+    map_lines = _map_table(map_rows, rut_map(d0.qpos.dtype), us, console)
     where = machine()
     console.print(f"machine: {where}")
     text = "\n".join(
@@ -206,10 +222,53 @@ def main(argv=None):
             " the four equilibria with their slip angles, their forward-mode slopes, the wheel"
             " Jacobians and the implicit update; at the simulator accuracy"
             ' (`ContactModel(terrain, accuracy="simulator")`) with fewer quadrature nodes.',
+            "",
+            *map_lines,
         ]
     )
     if not args.no_docs:
         write_block("mjx-benchmarks", text)
+
+
+def _map_table(map_rows, grid, us, console):
+    """The rut map's rows (Markdown lines; printed too): the rover's step with and
+    without a map, their difference, and the map's memory per environment."""
+    nx, ny = grid.depth.shape
+    memory = f"{grid.nbytes / 1024:,.0f} KiB ({nx} x {ny} cells)"
+    head = (
+        "| environments | steps timed | MJX + snowjax step | the same on a rut map |"
+        " rut map per step (read, `Rut`, mark; 4 wheels) | on a map / without |"
+        " map memory per environment |"
+    )
+    lines = [head, "|---|---|---|---|---|---|---|"]
+    table = Table(title="the rover on a rut map")
+    for col in ("envs", "steps", "MJX+snowjax", "on a map", "map per step", "ratio", "memory"):
+        table.add_column(col)
+    for batch, steps, t_all, t_map in map_rows:
+        cells = (
+            f"{batch:,}",
+            str(steps),
+            us(t_all, batch),
+            us(t_map, batch),
+            us(t_map - t_all, batch),
+            f"{t_map / t_all:.2f}",
+            memory,
+        )
+        lines.append("| " + " | ".join(cells) + " |")
+        table.add_row(*cells)
+    console.print(table)
+    x0, x1, y0, y1 = MAP_EXTENT
+    return [
+        *lines,
+        "",
+        f"* The rut map (`snowjax.mjx.rollout(..., ruts=RutMap)`): {x1 - x0:g} m x"
+        f" {y1 - y0:g} m in {MAP_CELL * 100:g} cm cells per environment, {grid.depth.dtype}"
+        " (the cost per step does not grow with the map: each wheel's mark updates a"
+        f" window of {grid.window} x {grid.window} cells; the memory grows with its area)."
+        " Rut map per step = (step on a rut map) - (step without): reading the map ahead"
+        " of the four wheels, their equilibria on a `Rut` instead of the virgin snow, the"
+        " depths they leave and the marks.",
+    ]
 
 
 if __name__ == "__main__":

@@ -46,6 +46,23 @@ deepens or shallows with slip (`sinkage` is reported, not applied to the geometr
 lateral force acts at the axle, not at the contact patch (no roll moment from it, as in
 `simulate_planar`, which has no roll).
 
+**Ruts** (the guide's ruts page).  `ruts=snowjax.Ruts(k_0, a_u, follows)`: quasi-static,
+a following wheel runs at every instant on the `Rut` (Gawwad & Crolla's reloading, thesis
+eq. 2.21) of the depth its leader leaves now, times the overlap of their paths.
+`ruts=snowjax.RutMap.empty(...)`: the ruts' depth on a grid over the
+world's x-y plane (z up), carried through `step` (returned third) and `rollout`
+(`Rollout.rut_map`), one map per environment under `jax.vmap`.  In every step each wheel
+reads the rut its radius ahead of its centre along its direction
+of travel (behind it when reversing), runs on that `Rut`, and marks the segment its
+centre swept in the step, `p - v dt` to `p`, with the depth it leaves
+(`MjxWheelForces.depth`): a follower meets its leader's rut once the leader has been
+there, and a vehicle meets its own ruts on a second lap.  Memory: `RutMap.nbytes` per
+environment (one number per cell); the cost per step does not grow with the map.  The
+map is read from the positions once per step, so the implicit slopes below leave out how
+the rut seen changes with the wheel's velocity; the rigid ground stays where it is (the
+rut changes the snow's forces and `sinkage`, not MuJoCo's geometry); a map on an
+inclined floor or a height field is its projection on the x-y plane.
+
 **Stiff wheel forces.**  Near the self-propelled slip the wheel-spin equation is stiff
 (time constant `I v / (r (1 - i)^2 dM_w/di)`, well below MJX's step at low speed), and
 at low speed so is the lateral force (cornering stiffness / speed).  `step` therefore
@@ -59,9 +76,10 @@ accepted.
 
 **Gradients.**  Forward mode (`jax.jvp`, `jax.jacfwd`) works through `step` and `rollout`
 with any MJX settings and is the cheap choice for a few parameters (snow, controls).
-Reverse mode (`jax.grad`) needs MJX's `opt.iterations = 1` (its constraint solver is a
-`while_loop` otherwise); it is not tested on the shipped rover (the planar vehicle this
-bridge used to ship bounced with one iteration), so differentiate it in forward mode.
+Reverse mode (`jax.grad`) needs `solver_unroll=k` (`step`, `rollout`): MJX's
+constraint solver is a `while_loop`, which reverse mode cannot differentiate; k unrolled
+Newton iterations can (k = 2 on the shipped rover: a 100-step return's gradient within
+5e-8 of central differences, `tests/test_rl_gradients.py`; k = 1 bounced and diverged).
 
 **Many environments on a CPU.**  MJX's own `mjx.step` on the shipped rover (which has
 joint damping) hung when vmapped over 256 or more environments on a 2-core CPU (jaxlib

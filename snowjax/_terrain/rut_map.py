@@ -101,8 +101,8 @@ class RutMap(eqx.Module):
         of `cell_size` h [m]; `k_0` [Pa/m], `a_u` [Pa/m^2] as in `Rut`; `reach` [m]: the
         largest extent of one wheel's mark in one step (its width plus its travel),
         which sets `window = ceil(reach / h) + 8` cells (a mark that does not fit
-        raises at run time, `eqx.error_if`); `dtype`: of `depth` (default
-        JAX's float); `max_bytes` [bytes]: the most the map's cells, or one mark's
+        raises at run time, `eqx.error_if`); `dtype`: of `depth`, `k_0` and `a_u`
+        (default JAX's float); `max_bytes` [bytes]: the most the map's cells, or one mark's
         window, may take (default `MAX_BYTES`, 4 GiB; raise it for a larger map).
 
         **Raises:** `ValueError` for a non-positive size or an empty extent, and, before
@@ -131,6 +131,10 @@ class RutMap(eqx.Module):
                     "raise max_bytes"
                 )
         _check_modulus(k_0, a_u)
+        # The moduli in the map's dtype, not weakly typed: a map that comes back from a
+        # `lax.scan` (a rollout's) has the same types as the empty one, so a jitted
+        # function called again with it is not compiled again.
+        k_0, a_u = jnp.asarray(k_0, dtype), jnp.asarray(a_u, dtype)
         return cls(jnp.zeros((nx, ny), dtype), k_0, a_u, (x0 + h / 2, y0 + h / 2), h, int(window))
 
     @property

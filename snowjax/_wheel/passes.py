@@ -99,6 +99,14 @@ def _below_surface(sinkage, floor, terrain):
     return jnp.minimum(sinkage + floor, terrain.depth)
 
 
+def _left_behind(sinkage, rut, seen):
+    """The rut's state [m] a wheel leaves behind that sank `sinkage` [m] below the floor
+    of `rut` (a `Rut` of depth `seen` [m] of its virgin terrain): its lowest point below
+    the original surface, or the rut it ran in where that is deeper (a wheel within the
+    rut's elastic rebound leaves the rut as it was)."""
+    return jnp.maximum(_below_surface(sinkage, rut.floor_depth, rut.virgin), seen)
+
+
 class Ruts(eqx.Module):
     """Wheels of a vehicle running in the ruts of the wheels ahead of them (the
     `ruts=` option of `simulate_longitudinal`, `simulate_planar` and `snowjax.mjx`).
@@ -170,13 +178,34 @@ class Ruts(eqx.Module):
         the layout resolved)."""
         return _in_tracks(self, contact, width, overlap, solve)
 
+    def _depths(self, terrain, width, overlap, sinkage):
+        """(the rut depth each wheel saw, the rut's state it leaves behind) [m] of wheels
+        that `_solve` put at `sinkage` [m] below their ruts' floors (the wheel axis last;
+        the layout resolved): `_in_tracks`'s depths again, from its results."""
+        follows = np.asarray(self.follows)
+        n = follows.size
+        width = jnp.broadcast_to(jnp.asarray(width), (n,))
+        seen: list = [None] * n
+        left: list = [None] * n
+        for k, j in enumerate(follows.tolist()):  # leaders before followers
+            z = sinkage[..., k]
+            if j < 0:
+                seen[k], left[k] = jnp.zeros_like(z), z
+            else:
+                seen[k] = _take(overlap, n, np.array([k]))[..., 0] * left[j]
+                rut = Rut(terrain, seen[k], width[j], self.k_0, self.a_u)
+                left[k] = _left_behind(z, rut, seen[k])
+        return jnp.stack(seen, -1), jnp.stack(left, -1)
+
 
 class _VirginGround(eqx.Module):
     """The ground of a vehicle without `Ruts`: every wheel on the virgin terrain.  With
     `Ruts` (its layout resolved, `_resolved`) the two are the terrain state a vehicle's
     wheels run on: `layout(n)`, `_overlap(overlap)` and `_solve(contact, width,
     overlap, solve)`, where `solve(contact, take)` solves the wheels that `take`
-    selects from arrays with the wheel axis last and returns (results, sinkage)."""
+    selects from arrays with the wheel axis last and returns (results, sinkage), and
+    `_depths(terrain, width, overlap, sinkage)`: the rut depth each wheel saw and the
+    rut's state it leaves behind, from the solved sinkages."""
 
     def layout(self, num_wheels: int) -> tuple[int, ...]:
         """Every wheel a leader on virgin snow."""
@@ -189,6 +218,11 @@ class _VirginGround(eqx.Module):
     def _solve(self, contact, width, overlap, solve):
         del width, overlap
         return solve(contact, lambda x: x)[0]
+
+    def _depths(self, terrain, width, overlap, sinkage):
+        """No rut (0) and the wheels' own sinkage [m] (`Ruts._depths`)."""
+        del terrain, width, overlap
+        return jnp.zeros_like(sinkage), sinkage
 
 
 def track_offset(
@@ -253,7 +287,10 @@ def _resolved(ruts, num_wheels: int) -> Ruts | _VirginGround:
     if ruts is None:
         return _VirginGround()
     if not isinstance(ruts, Ruts):
-        raise TypeError(f"ruts must be None or a snowjax.Ruts, got {type(ruts).__name__}")
+        raise TypeError(
+            f"ruts must be None or a snowjax.Ruts (or, in snowjax.mjx, a RutMap), got "
+            f"{type(ruts).__name__}"
+        )
     return Ruts(ruts.k_0, ruts.a_u, ruts.layout(num_wheels))
 
 
@@ -292,7 +329,7 @@ def _in_tracks(ruts, contact, width, overlap, solve):
             seen = take(overlap) * jnp.stack([depth[j] for j in follows[idx]], -1)
             rut = Rut(contact.terrain, seen, width[follows[idx]], ruts.k_0, ruts.a_u)
             result, sinkage = solve(eqx.tree_at(lambda c: c.terrain, contact, rut), take)
-            total = jnp.maximum(_below_surface(sinkage, rut.floor_depth, contact.terrain), seen)
+            total = _left_behind(sinkage, rut, seen)
         for i, k in enumerate(idx):
             depth[k] = total[..., i]
         parts.append(result)
@@ -367,13 +404,21 @@ def drive_path(
     """
     if np.ndim(positions) != 3 or np.shape(positions)[-1] != 2:
         raise ValueError(f"positions must have shape (steps, n, 2); got {np.shape(positions)}")
-    if lookahead is None:  # the wheel's radius
+    lookahead = _lookahead(wheel, rut_map, lookahead)
+    model = _as_model(terrain)
+    return _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahead)
+
+
+def _lookahead(wheel: AbstractWheel, rut_map: RutMap, lookahead) -> Any:
+    """How far ahead of its axle a wheel reads `rut_map` [m]: `lookahead`, or (None) the
+    wheel's radius (the largest, for wheels of several sizes), checked to exceed sqrt(2)
+    times the map's cell size where it is concrete (`RutMap.check_lookahead`)."""
+    if lookahead is None:
         diameter = wheel.diameter
         traced = _is_traced(diameter)
         lookahead = jnp.max(diameter) / 2 if traced else float(np.max(np.asarray(diameter))) / 2
-    rut_map.check_lookahead(lookahead)  # (a traced one is not checked)
-    model = _as_model(terrain)
-    return _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahead)
+    rut_map.check_lookahead(lookahead)
+    return lookahead
 
 
 @eqx.filter_jit
@@ -392,7 +437,7 @@ def _drive_path(wheel, model, rut_map, positions, headings, loads, slip, lookahe
         seen = grid.read(position, heading, width, lookahead)
         rut = Rut(terrain, seen, width, grid.k_0, grid.a_u)
         st = solve_wheel(wheel, _with_terrain(model, rut), load, s, initial_entry_angle=hint)
-        total = jnp.maximum(_below_surface(st.sinkage, rut.floor_depth, terrain), seen)
+        total = _left_behind(st.sinkage, rut, seen)
         grid = grid.mark(previous, position, width, total)
         hint = jax.lax.stop_gradient(jnp.where(jnp.isfinite(st.entry_angle), st.entry_angle, hint))
         out = (total, seen, st.motion_resistance, st.drawbar_pull, st.torque, st.status)
