@@ -43,7 +43,7 @@ def _missing_docs_packages():
 
 
 # Public submodules (not imported by `import snowjax`), documented by their own `__all__`.
-SUBMODULES = ("mjx",)
+SUBMODULES = ("mjx", "playground")
 
 
 def _submodule_names(name):
@@ -98,7 +98,7 @@ def test_mkdocs_build_strict(tmp_path):
 
 GUIDE = ROOT / "docs" / "guide"
 GUIDE_PAGES = (
-    "wheel", "terrains", "steering", "tyres", "ruts", "vehicles", "mjx", "calibration",
+    "wheel", "terrains", "steering", "tyres", "ruts", "vehicles", "mjx", "rl", "calibration",
     "sweeps", "validation", "performance", "reliability", "thesis", "extending",
 )  # fmt: skip
 NOTEBOOKS = sorted(p.name for p in (ROOT / "notebooks").glob("*.ipynb"))

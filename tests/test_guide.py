@@ -5,6 +5,7 @@ also the fixture of `tests/test_mjx.py`."""
 
 from __future__ import annotations
 
+import importlib
 import os
 import sys
 import types
@@ -17,13 +18,14 @@ from .test_docs import GUIDE, GUIDE_PAGES, python_blocks
 @pytest.mark.slow  # the examples compile as a user's would: about 3 minutes in all
 @pytest.mark.parametrize("page", GUIDE_PAGES)
 def test_guide_example_runs(page, tmp_path, monkeypatch):
-    if page == "mjx":
+    extra = {"mjx": "snowjax.mjx", "ruts": "snowjax.mjx", "rl": "snowjax.playground"}
+    if page in extra:
         try:
-            import snowjax.mjx  # noqa: F401
+            importlib.import_module(extra[page])
         except ImportError:
             if os.environ.get("CI", "").lower() == "true":
                 raise
-            pytest.skip("the snowjax[mjx] extra is not installed")
+            pytest.skip(f"the extra {extra[page]} needs is not installed")
     monkeypatch.chdir(tmp_path)
     text = (GUIDE / f"{page}.md").read_text(encoding="utf-8")
     # A module of its own (a class defined in an example, e.g. a dataclass, looks its

@@ -30,6 +30,7 @@ for name in WORKFLOWS:
 ALLOWED["_cli"] = MODELS | WORKFLOWS
 ALLOWED["_mjx"] = MODELS | WORKFLOWS  # the optional MuJoCo MJX bridge
 ALLOWED["mjx"] = {"_mjx"}  # snowjax.mjx: its public names
+ALLOWED["playground"] = {"_mjx"}  # snowjax.playground: its public names
 
 
 def _modules():
