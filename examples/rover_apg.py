@@ -56,22 +56,11 @@ def train(settings: dict, seed: int = 0, log=print):
 
     env = sp.SnowRover(config_overrides={"solver_unroll": 2})
     cfg = env._config
-    curve = []
-    start = time.perf_counter()
-
     # Brax's APG reports the evaluation's index; its env-steps per evaluation interval:
     per_eval = round(settings["policy_updates"] / max(settings["num_evals"] - 1, 1))
     per_eval *= settings["num_envs"] * settings["horizon_length"]
-
-    def progress(index, metrics):
-        row = (
-            int(index) * per_eval,
-            time.perf_counter() - start,
-            float(metrics["eval/episode_arrived"]),
-            float(metrics["eval/episode_reward"]),
-        )
-        curve.append(row)
-        log(f"{row[0]:>9} env-steps  {row[1]:7.0f} s  success {row[2]:.2f}  return {row[3]:.2f}")
+    curve, progress = rover_ppo.recorder(log, lambda index: int(index) * per_eval)
+    start = time.perf_counter()
 
     make_policy, params, _ = apg.train(
         environment=env,

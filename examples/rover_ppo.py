@@ -59,6 +59,26 @@ QUICK = dict(
 HELD_OUT_SEED = 12345  # the 64 evaluation episodes (training uses seed and seed + 1 ...)
 
 
+def recorder(log=print, env_steps=int):
+    """(curve, progress): Brax's `progress_fn` appending (env-steps, wall seconds since the
+    recorder was made, evaluation success rate, mean return) to `curve` and logging it;
+    `env_steps` maps the trainer's step count to env-steps."""
+    curve = []
+    start = time.perf_counter()
+
+    def progress(steps, metrics):
+        row = (
+            env_steps(steps),
+            time.perf_counter() - start,
+            float(metrics["eval/episode_arrived"]),
+            float(metrics["eval/episode_reward"]),
+        )
+        curve.append(row)
+        log(f"{row[0]:>9} env-steps  {row[1]:7.0f} s  success {row[2]:.2f}  return {row[3]:.2f}")
+
+    return curve, progress
+
+
 def train(settings: dict, seed: int = 0, config_overrides: dict | None = None, log=print):
     """PPO on `SnowRover`: returns (env, inference function factory, parameters, learning
     curve rows (env-steps, wall seconds, success rate, mean return), wall time [s])."""
@@ -67,18 +87,8 @@ def train(settings: dict, seed: int = 0, config_overrides: dict | None = None, l
 
     env = sp.SnowRover(config_overrides=config_overrides)
     cfg = env._config
-    curve = []
+    curve, progress = recorder(log)
     start = time.perf_counter()
-
-    def progress(steps, metrics):
-        row = (
-            int(steps),
-            time.perf_counter() - start,
-            float(metrics["eval/episode_arrived"]),
-            float(metrics["eval/episode_reward"]),
-        )
-        curve.append(row)
-        log(f"{row[0]:>9} env-steps  {row[1]:7.0f} s  success {row[2]:.2f}  return {row[3]:.2f}")
 
     network_factory = functools.partial(
         ppo_networks.make_ppo_networks,

@@ -12,6 +12,7 @@ from typing import Any
 import equinox as eqx
 import jax
 import jax.numpy as jnp
+import numpy as np
 from jaxtyping import Array, ArrayLike, Float, PRNGKeyArray
 
 from .._terrain.rut_map import RutMap
@@ -340,7 +341,7 @@ class _RoverTask:
             torque = jnp.full((4,), self.max_torque) * throttle
         else:
             radius = self.wheels.wheel.diameter / 2
-            spin = data.qvel[jnp.asarray(self.wheels.dof_ids)]
+            spin = data.qvel[np.asarray(self.wheels.dof_ids)]
             error = throttle * self.max_speed / radius - spin
             torque = jnp.clip(self.speed_gain * error, -self.max_torque, self.max_torque)
         return rover_controls(steer, torque)
