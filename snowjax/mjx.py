@@ -67,12 +67,17 @@ inclined floor or a height field is its projection on the x-y plane.
 (time constant `I v / (r (1 - i)^2 dM_w/di)`, well below MJX's step at low speed), and
 at low speed so is the lateral force (cornering stiffness / speed).  `step` therefore
 treats the snow forces linearly implicitly: forward-mode derivatives of every wheel's
-(drawbar pull, lateral force, -M_w, M_z) w.r.t. its (v_x, v_y, omega) (diagonal slopes
-clipped to damping) form a damping matrix `K = sum_k G_out,k^T D_k G_in,k` with the
-wheels' Jacobians (`mjx.jac`), and the step solves `(M + dt (D_joint + K)) qacc = f`
-before MJX's Euler update (MuJoCo's Euler treats joint damping implicitly in the same
-way).  Only `integrator="Euler"` (MuJoCo's default) with implicit damping enabled is
-accepted.
+(drawbar pull, lateral force, -M_w, M_z) w.r.t. its (v_x, v_y, omega) form a damping
+matrix `K = sum_k G_k^T D_k G_k` with the wheels' Jacobians (`mjx.jac`; rows along the
+heading, the lateral direction, the axle and the normal), and the step solves
+`(M + dt (D_joint + K)) qacc = f` before MJX's Euler update (MuJoCo's Euler treats joint
+damping implicitly in the same way).  Near rest the slopes are large and far from
+symmetric, and M + dt K could turn indefinite (the rover was thrown at 25 m/s under
+random controls); each block D_k therefore gets the least added diagonal damping for
+which the symmetric part of D_k + W_k / (2 dt) is diagonally dominant (W_k: the wheel
+body's own mass and least moment of inertia, part of M), so the symmetric part of the
+step's matrix stays >= M / 2.  In steady driving no block needs it.  Only
+`integrator="Euler"` (MuJoCo's default) with implicit damping enabled is accepted.
 
 **Gradients.**  Forward mode (`jax.jvp`, `jax.jacfwd`) works through `step` and `rollout`
 with any MJX settings and is the cheap choice for a few parameters (snow, controls).

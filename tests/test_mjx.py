@@ -30,6 +30,7 @@ except ImportError:  # the extra is absent: a skip locally, a failure in CI
 import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402
 from snowjax import mjx as smjx  # noqa: E402
+from snowjax._mjx.step import _dissipative  # noqa: E402
 
 from .notebook_runner import outputs_text, run_notebook  # noqa: E402
 from .test_sim import LOAD, VEHICLE, _parameters, _run  # noqa: E402
@@ -449,3 +450,34 @@ def test_bad_input_raises(rover):
         smjx.SnowRoverEnv(episode_length=0)
     with pytest.raises(ValueError, match="accuracy must be one of"):
         smjx.SnowRoverEnv(accuracy="fast")
+
+
+def test_the_implicit_blocks_keep_the_step_well_posed():
+    """`_dissipative`: whatever the slopes, the symmetric part of each wheel's block plus
+    W / (2 dt) is positive semi-definite (so M + dt (D_joint + K) keeps a symmetric part
+    >= M / 2); a block from steady straight driving (the guide's rover on the thesis
+    snow, wheel 0 after 3 s at 540 N m: measured slopes) is left as it is."""
+    radius, dt = 0.368, 0.01
+    inertia = jnp.array([[25.0, 25.0, 1.0, 1.0]] * 8)
+    rng = np.random.default_rng(0)
+    # Slopes as near rest: large, signed, far from symmetric (and a few mild ones).
+    size = np.array([1e4, 1e4, 1e4, 1e4, 10, 10, 10, 10])[:, None, None]
+    blocks = rng.normal(size=(8, 4, 3)) * size
+    out = np.asarray(_dissipative(jnp.asarray(blocks), radius, inertia, dt))
+    scale = np.array([1, 1, 1 / radius, 1 / radius])
+    w = np.asarray(inertia) * scale**2 / (2 * dt)
+    for k in range(8):
+        scaled = scale[:, None] * out[k] * scale[None, :]
+        sym = 0.5 * (scaled + scaled.T) + np.diag(w[k])
+        assert np.linalg.eigvalsh(sym).min() >= -1e-9 * np.abs(sym).max()
+        # Only the diagonal changes, and only upwards.
+        off = ~np.eye(4, dtype=bool)[:, :3]
+        np.testing.assert_array_equal(out[k][:, :3][off], blocks[k][off])
+        assert np.all(np.diagonal(out[k][:3, :3]) >= np.diagonal(blocks[k][:3, :3]))
+    steady = np.array(
+        [[48.3129, 0.0, -14.5216], [0.0, 972.4526, 0.0], [-17.5875, 0.0, 5.2864],
+         [0.0, 114.5835, 0.0]]
+    )  # fmt: skip
+    kept = np.asarray(_dissipative(jnp.asarray(steady[None]), radius, inertia[:1], 0.005))[0]
+    np.testing.assert_array_equal(kept[:, :3], steady)
+    np.testing.assert_array_equal(kept[:, 3], 0.0)

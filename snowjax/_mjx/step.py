@@ -65,7 +65,9 @@ class MjxWheelForces(eqx.Module):
       `resisting_torque`: M_w (2.12) applied against the spin [N m]; `aligning_torque`:
       M_z applied about the ground normal [N m] (all after the lift-off and rest
       regularisations).
-    - `spin_damping`: c = dM_w/domega >= 0 used implicitly [N m s/rad].
+    - `spin_damping`: c, the spin's damping used implicitly: dM_w/domega, plus near rest
+      the damping added to keep the step well posed (`snowjax.mjx`'s stiff wheel forces);
+      never below -I / (2 dt) (I: the wheel's least moment of inertia) [N m s/rad].
     - `normal`: the ground's unit normal under the wheel (world frame) [-], shape (n, 3).
     - `status`: `Status` of each equilibrium (int32).
     """
@@ -223,9 +225,11 @@ def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
     # jac[3 level + j, i, k]: d(output i of wheel k) / d(input j of wheel k's level).
     jac = jac.reshape(-1, 3, 4, n)[level, :, :, np.arange(n)]  # (n, 3 inputs, 4 outputs)
     damp = -jnp.swapaxes(jac, 1, 2)  # D = -d(F_x, F_y, -M_w, M_z)/d(v_x, v_y, omega)
-    diagonal = jnp.maximum(jnp.diagonal(damp[:, :3, :3], axis1=1, axis2=2), 0.0)
-    damp = damp.at[:, np.arange(3), np.arange(3)].set(diagonal)
-    damp = airborne[:, None, None] * damp
+    b = np.asarray(wheels.body_ids)
+    mass, moment = m.body_mass[b], jnp.min(m.body_inertia[b], axis=-1)
+    inertia = jnp.stack([mass, mass, moment, moment], -1).astype(dtype)
+    dt = jnp.asarray(m.opt.timestep, dtype)
+    damp = airborne[:, None, None] * _dissipative(damp, wheels.wheel.diameter / 2, inertia, dt)
     fx, fy = airborne * f.drawbar_pull, airborne * f.lateral_force
     mw, mz = airborne * f.resisting_torque, airborne * f.aligning_torque
     force = fx[:, None] * heading + fy[:, None] * lateral
@@ -254,9 +258,39 @@ def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
     return jnp.concatenate([force, torque], -1), damp, rows_out, plane, out
 
 
+def _dissipative(damp, radius, inertia, dt):
+    """Each wheel's 4 x 3 block D of slopes as the square 4 x 4 block (a zero column for
+    the wheel's rotation about the normal, on which its forces do not depend), plus the
+    least diagonal damping, per row, for which the symmetric part of D + W / (2 dt) is
+    diagonally dominant (Gershgorin), so positive semi-definite.  W = `inertia` (n, 4):
+    the wheel body's own (mass, mass, least principal moment, least principal moment)
+    [kg, kg, kg m^2, kg m^2].  Rows and columns are measured in (v_x, v_y, r omega,
+    r omega_n) [m/s] and (F_x, F_y, -M_w / r, M_z / r) [N] (`radius` r [m]), where a
+    wheel's slip block is near balance (F depends on r omega - v_x).
+
+    Why: near rest (slip jumping between -1 and 1) the slopes are large and far from
+    symmetric, and the symmetric part of M + dt K went indefinite (least eigenvalue
+    down to -1.3e4, from +1.5 for M alone, in random driving): MJX's implicit solve
+    then amplified the forces and threw the rover at 25 m/s.  The wheels' own inertia
+    is part of M (sum_k G_k^T W_k G_k <= M), so with the blocks above the symmetric part
+    of M + dt (D_joint + K) is >= M / 2 and the step's accelerations stay bounded by the
+    forces.  In steady driving no block needs it (unchanged there); near rest the step
+    damps more, as an implicit Euler step with a stiffer slope would."""
+    n = damp.shape[0]
+    square = jnp.concatenate([damp, jnp.zeros((n, 4, 1), damp.dtype)], axis=2)
+    one = jnp.ones((), damp.dtype)
+    scale = jnp.stack([one, one, one / radius, one / radius])
+    scaled = scale[None, :, None] * square * scale[None, None, :]
+    sym = 0.5 * (scaled + jnp.swapaxes(scaled, 1, 2))
+    diag = jnp.diagonal(sym, axis1=1, axis2=2) + inertia * scale**2 / (2 * dt)
+    off = jnp.sum(jnp.abs(sym), axis=2) - jnp.abs(jnp.diagonal(sym, axis1=1, axis2=2))
+    shift = jnp.maximum(off - diag, 0.0) / scale**2  # back to the wheel's units
+    return square.at[:, np.arange(4), np.arange(4)].add(shift)
+
+
 def _snow_damping_matrix(m, d, wheels, damp, rows):
-    """K = sum_k G_out,k^T D_k G_in,k [N s/m ...]: G_in = (heading^T J_p, lateral^T J_p,
-    axle^T J_r) (3 x nv), G_out = G_in with normal^T J_r appended (4 x nv)."""
+    """K = sum_k G_k^T D_k G_k [N s/m ...], G = (heading^T J_p, lateral^T J_p, axle^T
+    J_r, normal^T J_r) (4 x nv), D_k the wheel's 4 x 4 block (`_dissipative`)."""
     b = jnp.asarray(wheels.body_ids)
 
     def wheel_rows(body, point, r):
@@ -265,7 +299,7 @@ def _snow_damping_matrix(m, d, wheels, damp, rows):
         return g  # (4, nv)
 
     g = jax.vmap(wheel_rows)(b, d.xipos[np.asarray(wheels.body_ids)], rows)  # (n, 4, nv)
-    return jnp.einsum("kiv,kij,kjw->vw", g, damp, g[:, :3])
+    return jnp.einsum("kiv,kij,kjw->vw", g, damp, g)
 
 
 def _check_step_args(m, d, wheels, model, speed_eps):
