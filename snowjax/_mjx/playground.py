@@ -26,6 +26,13 @@ __all__ = ["SnowRover", "default_config", "wrap_for_brax_training"]
 
 NAME = "SnowRover"  # its name in Playground's registry
 
+# The rover's snows: `SnowRanges`' defaults with tan(phi) from 0.35.  On weaker snow the
+# rover is often immobilised whatever it does (full throttle straight ahead for 5 s: it
+# moved less than 2 m on 63 of 152 snows drawn from `SnowRanges()` with tan(phi) < 0.35,
+# on 3 of 360 with tan(phi) >= 0.35; the RL guide), and a goal it cannot reach teaches a
+# policy nothing.
+_MOBILE_TAN_PHI = (0.35, 0.55)
+
 
 def default_config() -> config_dict.ConfigDict:
     """`SnowRover`'s settings (Playground's convention: `ctrl_dt`, `sim_dt`,
@@ -50,7 +57,9 @@ def default_config() -> config_dict.ConfigDict:
     - `goal.distance` (low, high) [m], `goal.bearing` [rad] (goals within +-bearing of
       the rover's initial heading; pi: any direction), `goal.radius` [m]: arrival.
     - `snow`: `SnowRanges`' ranges (low, high) of `WongSnow`'s parameters, SI
-      (`p_w` [Pa], `z_w` [m], `cohesion` [Pa], `tan_phi` [-], `shear_modulus` [m]).
+      (`p_w` [Pa], `z_w` [m], `cohesion` [Pa], `tan_phi` [-], `shear_modulus` [m]):
+      `SnowRanges`' defaults except tan(phi) in (0.35, 0.55), where the rover can move
+      (below 0.35 it was immobilised on 41 % of the snows tried; the RL guide).
     - `reward_config.scales`: `progress` (per metre towards the goal) and `arrival`
       (once, on reaching it).
     - `ruts`: `cell_size` [m] > 0 carries a `RutMap` in the state (`info["rut_map"]`,
@@ -62,6 +71,7 @@ def default_config() -> config_dict.ConfigDict:
     """
     ranges = SnowRanges()
     snow = {k: tuple(getattr(ranges, k)) for k in SnowRanges.__dataclass_fields__}
+    snow["tan_phi"] = _MOBILE_TAN_PHI
     return config_dict.create(
         ctrl_dt=0.1,
         sim_dt=0.01,
@@ -85,8 +95,9 @@ class SnowRover(MjxEnv):
     every episode: a MuJoCo Playground environment (`reset(rng)`, `step(state,
     action)` on Playground's `State`, pure and `jax.vmap`-able).
 
-    **Task** (the same as `snowjax.mjx.SnowRoverEnv`'s): each episode draws a
-    `WongSnow` uniformly from `config.snow`'s ranges and a goal `config.goal.distance`
+    **Task** (`snowjax.mjx.SnowRoverEnv`'s, by default on the snows where the rover can
+    move: `default_config`): each episode draws a `WongSnow` uniformly from
+    `config.snow`'s ranges and a goal `config.goal.distance`
     away within +-`config.goal.bearing` of the rover's heading (any direction by
     default); the rover starts at rest at the origin facing +x.  Reward per step:
     `scales.progress` times the progress towards the goal [m] plus `scales.arrival` on
