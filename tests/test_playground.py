@@ -92,9 +92,11 @@ def test_brax_wrapper_autoresets_and_vmaps_256_environments_without_nan():
 
 
 def test_ppo_on_a_tiny_budget_raises_the_mean_return():
-    """Brax's PPO, through `wrap_for_brax_training`, on 16 environments for 3 iterations
+    """Brax's PPO, through `wrap_for_brax_training`, on 16 environments for 6 iterations
     of short episodes (2 s, goals 4-6 m ahead): the deterministic policy's mean return
-    over 32 fixed episodes rises above the untrained policy's (a smoke test)."""
+    over 32 fixed episodes rises above the untrained policy's (a smoke test).  Measured
+    (float64): from 0.03 to 0.99 m (seed 1; seed 2: -0.01 to 1.30); after 3 iterations
+    seed 1 had not moved (-0.02)."""
     import functools
 
     from brax.training.agents.ppo import networks as ppo_networks
@@ -105,7 +107,7 @@ def test_ppo_on_a_tiny_budget_raises_the_mean_return():
     )
     snapshots = []
     make_policy, params, _ = ppo.train(
-        environment=env, num_timesteps=3 * 16 * 4 * 10, episode_length=20, num_envs=16,
+        environment=env, num_timesteps=6 * 16 * 4 * 10, episode_length=20, num_envs=16,
         batch_size=16, num_minibatches=4, unroll_length=10, num_updates_per_batch=4,
         learning_rate=3e-3, entropy_cost=1e-3, discounting=0.97, normalize_observations=True,
         wrap_env_fn=sp.wrap_for_brax_training, num_evals=2, num_eval_envs=4, seed=1,
