@@ -8,7 +8,6 @@ reuse one compile.
 """
 
 import importlib.metadata
-import os
 import pathlib
 import re
 
@@ -17,15 +16,12 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-try:
-    import mujoco
-    from mujoco import mjx
-except ImportError:  # the extra is absent: a skip locally, a failure in CI
-    if os.environ.get("CI", "").lower() == "true":
-        raise
-    pytest.skip(
-        "the snowjax[mjx] extra (mujoco, mujoco-mjx) is not installed", allow_module_level=True
-    )
+from .extras import require_extra
+
+require_extra("mjx", "mujoco", "mujoco.mjx")
+
+import mujoco  # noqa: E402
+from mujoco import mjx  # noqa: E402
 
 import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402

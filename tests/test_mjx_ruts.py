@@ -9,22 +9,17 @@ here (MuJoCo's `timestep`, 5 ms in the shipped model) to halve the laps' cost: t
 mean depths at 5 ms agree with these within 0.3 mm.
 """
 
-import os
-
 import equinox as eqx
 import jax
 import jax.numpy as jnp
 import numpy as np
 import pytest
 
-try:
-    from mujoco import mjx
-except ImportError:  # the extra is absent: a skip locally, a failure in CI
-    if os.environ.get("CI", "").lower() == "true":
-        raise
-    pytest.skip(
-        "the snowjax[mjx] extra (mujoco, mujoco-mjx) is not installed", allow_module_level=True
-    )
+from .extras import require_extra
+
+require_extra("mjx", "mujoco", "mujoco.mjx")
+
+from mujoco import mjx  # noqa: E402
 
 import snowjax as sj  # noqa: E402
 from snowjax import Status  # noqa: E402

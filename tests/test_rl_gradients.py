@@ -7,21 +7,12 @@ Real MJX, Playground and Brax on the CPU.  Skipped only when the `rl` extra is a
 compiling the rover's step with the snow's forces.
 """
 
-import os
-
 import jax
 import jax.numpy as jnp
-import pytest
 
-try:
-    import brax  # noqa: F401
-    import mujoco_playground  # noqa: F401
-except ImportError:  # the extra is absent: a skip locally, a failure in CI
-    if os.environ.get("CI", "").lower() == "true":
-        raise
-    pytest.skip(
-        "the snowjax[rl] extra (playground, brax) is not installed", allow_module_level=True
-    )
+from .extras import require_extra
+
+require_extra("rl", "mujoco_playground", "brax")
 
 import snowjax as sj  # noqa: E402
 import snowjax.playground as sp  # noqa: E402
