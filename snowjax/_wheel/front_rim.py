@@ -346,16 +346,42 @@ class FrontRimRule(AbstractContactRule):
         )
 
 
+class SteeredRimRule(AnyTerrainRule):
+    """A rigid rim at a slip angle on the front region of a terrain that offers closed
+    forms of its rim integrals: the any-terrain rule's quadrature (the combined shear
+    law and the lateral stresses have no closed form) with the closed-form rule's start
+    and bracket (`_closed_form_start`, `_closed_form_bracket`; a driven wheel's
+    longitudinal shear stress only adds to W under a slip angle too, and the start's
+    shear factor takes the combined law's share).
+
+    Measured on the thesis tyre on Wong snow at a slip angle of 10 degrees (1-9 kN,
+    slips 0-0.9, one process, interleaved): the start's theta0 within 0.5 % of the root
+    where the any-terrain start (`_scan_start`) was 17-20 % off, 3 Newton steps of the
+    batch instead of 5, and 0.68x the time of a solve (0.70x with braking slips); a
+    warm-started solve skips W at the cap where every wheel of the batch is driven and
+    surely carried."""
+
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+        del distribution  # the front region
+        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
+        bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
+        return *bracket, _warm_start(guess, theta_cap)
+
+
 def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:
-    """The contact rule of a combination: `FrontRimRule` where the terrain offers closed
-    forms of its rim integrals, on the front region of a rigid rim running straight
-    (`running.straight`, `_closed_form_rule`), else `AnyTerrainRule`."""
-    if running.straight and _closed_form_rule(terrain, distribution, wheel):
-        return _FRONT_RIM_RULE
+    """The contact rule of a combination: where the terrain offers closed forms of its
+    rim integrals, on the front region of a rigid rim (`_closed_form_rule`),
+    `FrontRimRule` running straight (`running.straight`) and `SteeredRimRule` at a slip
+    angle; else `AnyTerrainRule`."""
+    if _closed_form_rule(terrain, distribution, wheel):
+        return _FRONT_RIM_RULE if running.straight else _STEERED_RIM_RULE
     return _ANY_TERRAIN_RULE
 
 
 # One instance of each (no fields): building and hashing a module on every eager call
 # (the jit cache hashes its static arguments) cost about 14 us of a 500 us batch-1 solve.
 _FRONT_RIM_RULE = FrontRimRule()
+_STEERED_RIM_RULE = SteeredRimRule()
 _ANY_TERRAIN_RULE = AnyTerrainRule()
