@@ -2,6 +2,7 @@
 
     python benchmarks/compare.py 2280f0c            # that revision vs the working tree
     python benchmarks/compare.py 2280f0c --new HEAD --rounds 5 --out compare.md
+    python benchmarks/compare.py 2280f0c --only "Wong–Reece,slip angle"   # some rows
 
 Shared 2-core virtual machines drift by tens of percent between runs minutes apart, so
 two separate `benchmarks/run.py` tables cannot show a 10 % change, and neither can two
@@ -18,10 +19,11 @@ keeps each tree's best time over the rounds (per request: best of 10 calls, 3 at
 thesis snow, classic shear, loads 1-9 kN, slips 0-0.9, float64), the in-step latency (4
 wheels in a jitted `lax.scan`, warm-started) and the cost of one `simulate_longitudinal`
 step per wheel (4 driven wheels, 400 N m, 200 steps of 10 ms); the first call of a fresh
-process (compile, batch 1); and the general quadrature: Bekker's Snow (U.S.) with
-Wong–Reece, the layered snow on the front region, the rim on Wong snow at a slip angle of
-0.1 rad, and a deflecting tyre (100 kPa) on Wong snow and on Bekker's snow with
-Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  The table is
+process (compile, batch 1); and the general quadrature: every terrain law (Wong snow,
+Bekker's Snow (U.S.), a Reece test sand, the layered snow) on the front region and with
+Wong–Reece, the rim at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong
+snow and on Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips
+-0.3 to 0.9).  The table is
 printed (`--out FILE`: also written there): it compares revisions, so it belongs in a
 commit message or the CHANGELOG, not on the documentation's pages.
 """
@@ -95,12 +97,20 @@ def _rows() -> dict:
     # general quadrature).
     tire = sj.DeflectingTire(wheel.diameter, wheel.width, 0.176, 100e3, 0.0)
     bekker, rear = sj.BekkerSoil.snow_us(), sj.WongReece(0.43, 0.32)
+    reece = sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02)  # test sand
     others = {
         "Bekker snow (U.S.), Wong–Reece": (wheel, bekker, rear, None),
         "layered snow, front region": (wheel, sj.LayeredSnow.ice_layer_example(), None, None),
         "slip angle 0.1 rad": (wheel, snow, None, 0.1),
         "deflecting tyre (100 kPa)": (tire, snow, None, None),
         "deflecting tyre, Bekker snow (U.S.), Wong–Reece": (tire, bekker, rear, None),
+        "Wong snow, Wong–Reece": (wheel, snow, rear, None),
+        "Bekker snow (U.S.), front region": (wheel, bekker, None, None),
+        "Reece sand, front region": (wheel, reece, None, None),
+        "Reece sand, Wong–Reece": (wheel, reece, rear, None),
+        "layered snow, Wong–Reece": (wheel, sj.LayeredSnow.ice_layer_example(), rear, None),
+        "slip angle 0.1 rad, Wong–Reece": (wheel, snow, rear, 0.1),
+        "slip angle 0.1 rad, Bekker snow (U.S.)": (wheel, bekker, None, 0.1),
     }
     for label, (this_wheel, terrain, dist, angle) in others.items():
         solve = _solver(this_wheel, terrain, dist, angle)
@@ -111,6 +121,9 @@ def _rows() -> dict:
                 solve(load, slip).entry_angle.block_until_ready()
 
             rows[f"{label}, batch {n:,}"] = (run, 10 if n == 1 else 5, 1)
+    only = [w for w in os.environ.get("SNOWJAX_COMPARE_ONLY", "").split(",") if w]
+    if only:
+        rows = {k: v for k, v in rows.items() if k == FIRST_CALL or any(w in k for w in only)}
     for fn, calls, _ in rows.values():
         if calls:
             fn()  # compile before the first request
@@ -204,7 +217,14 @@ def main(argv=None) -> None:
     parser.add_argument("--new", help="measure this revision instead of the working tree")
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--out", type=pathlib.Path, default=None, help="also write the table here")
+    parser.add_argument(
+        "--only",
+        default="",
+        help="comma-separated parts of row names: time only the rows that contain one "
+        "(and the first call)",
+    )
     args = parser.parse_args(argv)
+    os.environ["SNOWJAX_COMPARE_ONLY"] = args.only  # read by the measuring processes
 
     def rev(name):
         return subprocess.run(
