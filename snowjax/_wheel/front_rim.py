@@ -47,7 +47,7 @@ import jax.numpy as jnp
 
 from .._terrain.base import AbstractTerrain
 from .distribution import _is_front
-from .general import AnyTerrainRule, _power_map, _rule, _sinh_offsets
+from .general import AbstractGeneralRule, AnyTerrainRule, _power_map, _rule, _sinh_offsets
 from .geometry import _plain_rim, _shear_displacement, _sincos_half, max_sinkage
 from .inputs import _magnitude_window
 from .rules import AbstractContactRule
@@ -305,7 +305,22 @@ def _flush_tiny_slip(slip):
     return slip + jax.lax.stop_gradient(flushed - slip)
 
 
-class FrontRimRule(AbstractContactRule):
+class AbstractClosedFormStart(AbstractContactRule):
+    """A rule that starts the solver from the closed-form no-shear balance of a rigid
+    rim on the front region of a terrain that offers closed forms of its rim integrals
+    (`_closed_form_start`), and brackets a warm start with its no-shear capacity
+    (`_closed_form_bracket`); abstract: its contact integrals are a subclass's."""
+
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+        del distribution  # the front region
+        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
+        bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
+        return *bracket, _warm_start(guess, theta_cap)
+
+
+class FrontRimRule(AbstractClosedFormStart):
     """The closed-form rule (module documentation): graded panels placed by the shear
     law (its `nodes_closed_form`), the log singularity at a bottomed axle subtracted
     with the terrain's closed forms, the closed-form no-shear start, and both node
@@ -328,14 +343,6 @@ class FrontRimRule(AbstractContactRule):
     def prepare_slip(self, slip):
         return _flush_tiny_slip(slip)
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
-        del distribution  # the front region
-        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
-
-    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
-        bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
-        return *bracket, _warm_start(guess, theta_cap)
-
     def contact(
         self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
         terms, bottomed, moving_rule,
@@ -346,7 +353,7 @@ class FrontRimRule(AbstractContactRule):
         )
 
 
-class SteeredRimRule(AnyTerrainRule):
+class SteeredRimRule(AbstractClosedFormStart, AbstractGeneralRule):
     """A rigid rim at a slip angle on the front region of a terrain that offers closed
     forms of its rim integrals: the any-terrain rule's quadrature (the combined shear
     law and the lateral stresses have no closed form) with the closed-form rule's start
@@ -357,17 +364,10 @@ class SteeredRimRule(AnyTerrainRule):
     Measured on the thesis tyre on Wong snow at a slip angle of 10 degrees (1-9 kN,
     slips 0-0.9, one process, interleaved): the start's theta0 within 0.5 % of the root
     where the any-terrain start (`_scan_start`) was 17-20 % off, 3 Newton steps of the
-    batch instead of 5, and 0.68x the time of a solve (0.70x with braking slips); a
+    batch instead of 5 (2 with `bracketed._finished`'s predicted stop), and 0.68x the
+    time of a solve (0.70x with braking slips); a
     warm-started solve skips W at the cap where every wheel of the batch is driven and
     surely carried."""
-
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
-        del distribution  # the front region
-        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
-
-    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
-        bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
-        return *bracket, _warm_start(guess, theta_cap)
 
 
 def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:

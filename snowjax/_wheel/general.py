@@ -348,10 +348,9 @@ def _deepest_stress_angle(distribution, slip, theta0):
     )
 
 
-class AnyTerrainRule(AbstractContactRule):
-    """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
-    from W at two entry angles, and at the breakpoints of a law whose pressure can fall
-    (`start._scan_start`)."""
+class AbstractGeneralRule(AbstractContactRule):
+    """The any-terrain quadrature as a rule (abstract: its start is a subclass's):
+    `general_contact` at the law's `nodes_any_terrain`."""
 
     warm_layout: ClassVar[bool] = False
 
@@ -370,15 +369,6 @@ class AnyTerrainRule(AbstractContactRule):
         n = law.nodes_simulator[1]
         return (n, n)
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
-        del shear
-        deepest = functools.partial(_deepest_stress_angle, distribution, slip)
-        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest)
-
-    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
-        del slip, wheel, terrain
-        return _warm_bracket_start(vertical, theta_cap, load, guess)
-
     def contact(
         self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
         terms, bottomed, moving_rule,
@@ -387,3 +377,18 @@ class AnyTerrainRule(AbstractContactRule):
         return general_contact(
             contact, slip, terrain, distribution, law, n, running, braking, vertical_only, terms
         )
+
+
+class AnyTerrainRule(AbstractGeneralRule):
+    """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
+    from W at two entry angles, and at the breakpoints of a law whose pressure can fall
+    (`start._scan_start`)."""
+
+    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+        del shear
+        deepest = functools.partial(_deepest_stress_angle, distribution, slip)
+        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest)
+
+    def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
+        del slip, wheel, terrain
+        return _warm_bracket_start(vertical, theta_cap, load, guess)
