@@ -4,7 +4,14 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from snowjax._wheel.bracketed import FIRST_PHASE_STEPS, STRAGGLERS, solve_elementwise
+from snowjax._wheel.bracketed import (
+    FIRST_PHASE_STEPS,
+    STRAGGLERS,
+    BracketedNewton,
+    _BracketState,
+    _finished,
+    solve_elementwise,
+)
 
 TOL = 1e-12
 
@@ -48,3 +55,36 @@ def test_a_large_batch_and_its_single_group_slices_agree():
     )
     assert np.all(np.abs(np.asarray(_residual(whole, params))) <= TOL)
     np.testing.assert_allclose(sliced, whole, rtol=1e-12, atol=1e-12)
+
+
+def test_an_element_ends_where_it_finished_whatever_its_batch():
+    """A finished element stays put while the rest of its batch iterates, so its root does
+    not depend on its neighbours: each element alone and in one batch with the others
+    (whose slowest takes more Newton steps) end on the same float (the predicted stop
+    leaves residuals of up to 0.1 tol, which further steps would otherwise refine)."""
+    n = STRAGGLERS
+    params = _params(n)
+    whole = np.asarray(_solve(params))
+    alone = np.array([float(_solve(tuple(p[k : k + 1] for p in params))[0]) for k in range(8)])
+    np.testing.assert_allclose(alone, whole[:8], rtol=1e-15, atol=0)
+
+
+def test_the_predicted_stop_needs_two_newton_steps_in_the_quadratic_regime():
+    """`_finished` takes a residual predicted below 0.1 atol by two Newton steps in a row
+    (|f| <= 1e-3 before the last) as converged; a step after a bisection (or the first
+    step) predicts nothing, and a prediction above 0.1 atol is not enough."""
+    solver = BracketedNewton(rtol=1e-9, atol=1e-9)
+    y = jnp.zeros(4)
+    bracket = (jnp.full(4, -1.0), jnp.full(4, 1.0))
+    f_now = jnp.array([1e-5, 1e-5, 1e-5, 2e-3])
+    previous = _BracketState(
+        *bracket, jnp.full(4, 1e-2), jnp.array([1e-2, 1e-2, 1e-4, 1e-2]),
+        jnp.full(4, jnp.inf), jnp.array([True, False, True, True]),
+    )  # fmt: skip
+    # f(z) = f_now - z: the Newton step is -f_now, so d_k = -f_now.
+    _, state, _ = solver.step(lambda z, _: (f_now - z, None), y, None, {}, previous, None)
+    converged, _ = _finished(state, y, 1e-9, 1e-9)
+    # 0: 1e-5 (1e-5 / 1e-2)^2 = 1e-11 <= 1e-10; 1: the step before bisected; 2: 1e-5 (1e-5
+    # / 1e-4)^2 = 1e-7 > 1e-10; 3: |f| = 2e-3 is not yet quadratic convergence.
+    assert np.asarray(converged).tolist() == [True, False, False, False]
+    np.testing.assert_allclose(float(state.predicted[0]), 1e-11, rtol=1e-12)
