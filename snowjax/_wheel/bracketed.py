@@ -125,10 +125,12 @@ def _finished(state: _BracketState, y, atol, rtol) -> tuple[Array, Array]:
     steps in a row with |f| <= `QUADRATIC_REGIME` before the last, the residual at the
     new iterate predicted by their quadratic convergence, |f(y_k)| ~ |f(y_{k-1})| (d_k /
     d_{k-1})^2, below `PREDICTION_MARGIN` atol.  The prediction saves the evaluation
-    that would only confirm it (one Newton step of every solve: 3 -> 2 on the rim's
-    closed-form start, 4 -> 3 from the any-terrain start); `solve_wheel` checks the
-    balance at the root itself (its final quadrature) and reports `NOT_CONVERGED`
-    where it is off by more than 10 atol.
+    that would only confirm it where every element of a batch gets there in time
+    (measured on the thesis tyre: the batch of the rim on Wong snow, and of the rim at a
+    slip angle there, 2 Newton steps instead of 3; Bekker's snow with Wong–Reece 4
+    instead of 5; its front region 4 either way); `solve_wheel` checks the balance at
+    the root itself (its final quadrature) and reports `NOT_CONVERGED` where it is off
+    by more than 10 atol.
     """
     scale = atol + rtol * jnp.abs(y)
     confirmed = (jnp.abs(state.f) <= atol) & (jnp.abs(state.diff) <= scale)

@@ -365,9 +365,8 @@ class SteeredRimRule(AbstractClosedFormStart, AbstractGeneralRule):
     slips 0-0.9, one process, interleaved): the start's theta0 within 0.5 % of the root
     where the any-terrain start (`_scan_start`) was 17-20 % off, 3 Newton steps of the
     batch instead of 5 (2 with `bracketed._finished`'s predicted stop), and 0.68x the
-    time of a solve (0.70x with braking slips); a
-    warm-started solve skips W at the cap where every wheel of the batch is driven and
-    surely carried."""
+    time of a solve (0.70x with braking slips); a warm-started solve skips W at the cap
+    where every wheel of the batch is driven and surely carried."""
 
 
 def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:

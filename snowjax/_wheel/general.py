@@ -201,9 +201,10 @@ def _panel_ends(points, theta_r, theta0, entry_scale):
     known).
 
     The inner points are sorted by an odd-even transposition network of `where`s
-    (stable; the order carries no gradient): a contact has 0 to 7 of them, and XLA's
-    sort (`argsort` and the gathers it needs) cost 130-380 ns per element and
-    evaluation on CPU, 8-26 % of the any-terrain W.  An inner point clipped to theta0
+    (stable; the order carries no gradient): a contact has a few of them (none on a
+    rim's front region running straight on a law without a base), and XLA's sort
+    (`argsort` and the gathers it needs) cost 130-380 ns per element and evaluation on
+    CPU, 7-26 % of the any-terrain W.  An inner point clipped to theta0
     (a breakpoint beyond the contact) takes the entry's grading scale: the panel that
     ends there is the one that reaches the entry (a zero-length panel follows it).
     """
