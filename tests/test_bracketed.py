@@ -9,7 +9,6 @@ from snowjax._wheel.bracketed import (
     STRAGGLERS,
     BracketedNewton,
     _BracketState,
-    _finished,
     solve_elementwise,
 )
 
@@ -70,21 +69,24 @@ def test_an_element_ends_where_it_finished_whatever_its_batch():
 
 
 def test_the_predicted_stop_needs_two_newton_steps_in_the_quadratic_regime():
-    """`_finished` takes a residual predicted below 0.1 atol by two Newton steps in a row
-    (|f| <= 1e-3 before the last) as converged; a step after a bisection (or the first
-    step) predicts nothing, and a prediction above 0.1 atol is not enough."""
+    """A step counts an element as converged when its residual is predicted below 0.1
+    atol by two Newton steps in a row (|f| <= 1e-3 before the last); a step after a
+    bisection (or the first step) predicts nothing, a prediction above 0.1 atol is not
+    enough, and an element once converged stays so (`bracketed._finished`)."""
     solver = BracketedNewton(rtol=1e-9, atol=1e-9)
-    y = jnp.zeros(4)
-    bracket = (jnp.full(4, -1.0), jnp.full(4, 1.0))
-    f_now = jnp.array([1e-5, 1e-5, 1e-5, 2e-3])
+    y = jnp.zeros(5)
+    bracket = (jnp.full(5, -1.0), jnp.full(5, 1.0))
+    f_now = jnp.array([1e-5, 1e-5, 1e-5, 2e-3, 2e-3])
+    no = jnp.zeros(5, bool)
     previous = _BracketState(
-        *bracket, jnp.full(4, 1e-2), jnp.array([1e-2, 1e-2, 1e-4, 1e-2]),
-        jnp.full(4, jnp.inf), jnp.array([True, False, True, True]),
+        *bracket, jnp.full(5, 1e-2), jnp.array([1e-2, 1e-2, 1e-4, 1e-2, 1e-2]),
+        jnp.array([True, False, True, True, True]), no.at[4].set(True), no,
     )  # fmt: skip
     # f(z) = f_now - z: the Newton step is -f_now, so d_k = -f_now.
-    _, state, _ = solver.step(lambda z, _: (f_now - z, None), y, None, {}, previous, None)
-    converged, _ = _finished(state, y, 1e-9, 1e-9)
+    new_y, state, _ = solver.step(lambda z, _: (f_now - z, None), y, None, {}, previous, None)
     # 0: 1e-5 (1e-5 / 1e-2)^2 = 1e-11 <= 1e-10; 1: the step before bisected; 2: 1e-5 (1e-5
-    # / 1e-4)^2 = 1e-7 > 1e-10; 3: |f| = 2e-3 is not yet quadratic convergence.
-    assert np.asarray(converged).tolist() == [True, False, False, False]
-    np.testing.assert_allclose(float(state.predicted[0]), 1e-11, rtol=1e-12)
+    # / 1e-4)^2 = 1e-7 > 1e-10; 3: |f| = 2e-3 is not yet quadratic convergence; 4: as 3,
+    # but converged before, so it stays converged and where it was.
+    assert np.asarray(state.converged).tolist() == [True, False, False, False, True]
+    assert not np.any(np.asarray(state.collapsed))
+    np.testing.assert_array_equal(np.asarray(new_y), [1e-5, 1e-5, 1e-5, 2e-3, 0.0])

@@ -13,6 +13,7 @@ al., Numerical Recipes, 3rd ed., section 9.4) written as an optimistix root find
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, ClassVar
 
@@ -29,10 +30,11 @@ class _BracketState(eqx.Module):
     upper: Float[Array, " n"]
     f: Float[Array, " n"]
     diff: Float[Array, " n"]
-    # |f| predicted at the new iterate by the quadratic convergence of the last two Newton
-    # steps (inf where either was not a Newton step), and whether the last was one.
-    predicted: Float[Array, " n"]
+    # Whether the last step was a Newton step (its `diff` can predict the next residual).
     newton: Bool[Array, " n"]
+    # Per element, latched once true (`_finished`): converged, and the bracket collapsed.
+    converged: Bool[Array, " n"]
+    collapsed: Bool[Array, " n"]
 
 
 class BracketedNewton(optx.AbstractRootFinder):
@@ -62,7 +64,9 @@ class BracketedNewton(optx.AbstractRootFinder):
         lower = jnp.broadcast_to(jnp.asarray(options["lower"], f_struct.dtype), y.shape)
         upper = jnp.broadcast_to(jnp.asarray(options["upper"], f_struct.dtype), y.shape)
         inf = jnp.full(y.shape, jnp.inf, f_struct.dtype)
-        return _BracketState(lower, upper, inf, inf, inf, jnp.zeros(y.shape, bool))
+        no = jnp.zeros(y.shape, bool)
+        collapsed = upper - lower <= self.atol + self.rtol * jnp.abs(y)
+        return _BracketState(lower, upper, inf, inf, no, no, collapsed)
 
     def step(self, fn, y, args, options, state: _BracketState, tags):
         del options, tags
@@ -75,22 +79,14 @@ class BracketedNewton(optx.AbstractRootFinder):
         inside = (df < 0) & (newton > lower) & (newton < upper)
         done = jnp.abs(f) <= self.atol
         bisect = jnp.where(done, y, lower + 0.5 * (upper - lower))
-        new_y = jnp.where(inside, newton, bisect)
-        diff = y - new_y
-        # Two Newton steps in a row in the quadratic regime: f(y_k) ~ f(y_{k-1}) (d_k /
-        # d_{k-1})^2, d the steps (f'' / 2 estimated from the last step's result).
-        ratio = diff / jnp.where(state.newton, state.diff, jnp.inf)
-        quadratic = inside & state.newton & (jnp.abs(f) <= QUADRATIC_REGIME)
-        predicted = jnp.where(quadratic, jnp.abs(f) * ratio**2, jnp.inf)
-        new = _BracketState(lower, upper, f, diff, predicted, inside)
         # A finished element stays where it finished (its f is evaluated with the batch and
         # dropped): its result does not depend on how long the rest of its batch iterates.
-        converged, collapsed = _finished(state, y, self.atol, self.rtol)
-        stay = converged | collapsed
-        new_y, new = jax.tree_util.tree_map(
-            lambda old, upd: jnp.where(stay, old, upd), (y, state), (new_y, new)
-        )
-        return new_y, new, aux
+        stay = state.converged | state.collapsed
+        new_y = jnp.where(stay, y, jnp.where(inside, newton, bisect))
+        diff = y - new_y
+        new = _BracketState(lower, upper, f, diff, inside, state.converged, state.collapsed)
+        flags = _finished(state, new, new_y, self.atol, self.rtol)
+        return new_y, dataclasses.replace(new, converged=flags[0], collapsed=flags[1]), aux
 
     def terminate(self, fn, y, args, options, state: _BracketState, tags):
         """Stop when every element is finished; the result is then `successful` only if
@@ -98,9 +94,8 @@ class BracketedNewton(optx.AbstractRootFinder):
         (optimistix stops iterating at the first result that is not `successful`, so an
         unfinished solve must report success.)"""
         del fn, args, options, tags
-        converged, collapsed = _finished(state, y, self.atol, self.rtol)
-        finished: Bool[Array, ""] = jnp.all(converged | collapsed)
-        failed = finished & ~jnp.all(converged)
+        finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
+        failed = finished & ~jnp.all(state.converged)
         result = optx.RESULTS.where(
             failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful
         )
@@ -118,24 +113,33 @@ QUADRATIC_REGIME = 1e-3
 PREDICTION_MARGIN = 0.1
 
 
-def _finished(state: _BracketState, y, atol, rtol) -> tuple[Array, Array]:
-    """Per element: (converged, collapsed: the bracket is narrower than atol + rtol |y|).
+def _finished(
+    previous: _BracketState, state: _BracketState, y, atol, rtol
+) -> tuple[Array, Array]:
+    """Per element, after the step from `previous` to `state` and `y`: (converged,
+    collapsed: the bracket is narrower than atol + rtol |y|), each latched once true.
 
-    Converged: |f| <= atol and the last step below atol + rtol |y|; or, after two Newton
-    steps in a row with |f| <= `QUADRATIC_REGIME` before the last, the residual at the
-    new iterate predicted by their quadratic convergence, |f(y_k)| ~ |f(y_{k-1})| (d_k /
+    Converged: |f| <= atol at the step's start and the step below atol + rtol |y|; or, after two Newton steps
+    in a row with |f| <= `QUADRATIC_REGIME` before the last, the residual at the new
+    iterate predicted by their quadratic convergence, |f(y_k)| ~ |f(y_{k-1})| (d_k /
     d_{k-1})^2, below `PREDICTION_MARGIN` atol.  The prediction saves the evaluation
     that would only confirm it where every element of a batch gets there in time
     (measured on the thesis tyre: the batch of the rim on Wong snow, and of the rim at a
     slip angle there, 2 Newton steps instead of 3; Bekker's snow with Wong–Reece 4
     instead of 5; its front region 4 either way); `solve_wheel` checks the balance at
     the root itself (its final quadrature) and reports `NOT_CONVERGED` where it is off
-    by more than 10 atol.
+    by more than 10 atol.  Computed once per step and carried in the state, so that the
+    loop's test reads it.
     """
     scale = atol + rtol * jnp.abs(y)
-    confirmed = (jnp.abs(state.f) <= atol) & (jnp.abs(state.diff) <= scale)
-    converged = confirmed | (state.predicted <= PREDICTION_MARGIN * atol)
-    return converged, state.upper - state.lower <= scale
+    f = jnp.abs(state.f)
+    confirmed = (f <= atol) & (jnp.abs(state.diff) <= scale)
+    ratio = state.diff / jnp.where(previous.newton, previous.diff, jnp.inf)
+    quadratic = state.newton & previous.newton & (f <= QUADRATIC_REGIME)
+    predicted = quadratic & (f * ratio**2 <= PREDICTION_MARGIN * atol)
+    converged = previous.converged | confirmed | predicted
+    collapsed = previous.collapsed | (state.upper - state.lower <= scale)
+    return converged, collapsed
 
 
 # Newton steps every element of a batch takes together; elements still unconverged then
@@ -191,8 +195,7 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
     if rest <= 0:
         return first.value
     y, state = first.value, first.state
-    converged, collapsed = _finished(state, y, tol, tol)
-    left = ~(converged | collapsed)
+    left = ~(state.converged | state.collapsed)
     m = STRAGGLERS
 
     def next_group(carry):
