@@ -95,6 +95,40 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     assert total[1] > z_u and float(st.sinkage[1]) > d
 
 
+def test_a_rut_on_wong_snow_takes_the_closed_form_rule_and_matches_scipy():
+    """A rigid rim on a `Rut` of Wong snow on the front region takes the closed-form rule
+    (its panels cut at the reloading line's kink; braking too): driven and braked, with
+    the contact inside the reloading branch and beyond its kink, entry angle, motion
+    resistance, thrust and torque within 1e-7 of quad + brentq on the rut's law
+    (measured: 6e-12 at most over 28 random cases).  Rows: (z_u [m], load [N], slip)."""
+    from snowjax._wheel.front_rim import FrontRimRule, _contact_rule
+    from snowjax._wheel.running import Straight
+
+    snow = sj.WongSnow.thesis_fresh_snow()
+    rows = np.array(
+        [(0.15, 4000.0, 0.2), (0.15, 1500.0, 0.2), (0.04, 5000.0, 0.6), (0.04, 5000.0, -0.3),
+         (0.12, 1500.0, -0.2), (0.19, 3000.0, 0.05)]
+    )  # fmt: skip
+    rut = sj.Rut(snow, rows[:, 0], WHEEL.width, K_0, A_U)
+    assert isinstance(_contact_rule(rut, sj.FrontRegion(), WHEEL, Straight()), FrontRimRule)
+    st = sj.solve_wheel(WHEEL, rut, rows[:, 1], rows[:, 2])
+    assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    c, tan_phi, k = (float(x) for x in (snow.cohesion, snow.tan_phi, snow.shear_modulus))
+    crossed = []
+    for row, (z_u, load, slip) in enumerate(rows):
+        law, d, floor = _rut_law(_law(snow), z_u, float(WHEEL.width))
+        depth = float(snow.depth) - floor
+        theta0, (w, r, t, m) = ref.solve(
+            load, slip, 0.736, 0.235, law, c, tan_phi, k, 0.0, 0.0, z_f=d, depth=depth
+        )
+        crossed.append(float(st.sinkage[row]) > d)
+        np.testing.assert_allclose(st.entry_angle[row], theta0, rtol=1e-7)
+        np.testing.assert_allclose(st.motion_resistance[row], r, rtol=1e-7)
+        np.testing.assert_allclose(st.thrust[row], t, rtol=1e-7)
+        np.testing.assert_allclose(st.torque[row], m, rtol=1e-7)
+    assert any(crossed) and not all(crossed)  # both sides of the kink
+
+
 @pytest.mark.slow  # gradients through two equilibria (make test-slow)
 def test_gradients_flow_from_the_first_wheel_into_the_second():
     """d(second wheel's sinkage, R, DP) / d(p_w, k_0, load) with the rut left by the first

@@ -60,10 +60,14 @@ class AbstractTerrain(eqx.Module):
       panels;
     - `front_rim_integrals(entry_angle, diameter, clearance)` and
       `pressure_at_clearance(clearance, width)`: closed forms a law can offer for the
-      front region of the rim (default none; `WongSnow`'s).  With them the solver
-      starts from the closed-form load balance without shear and subtracts the
-      singularity of the normal stress at the axle of a wheel on the base (the
-      closed-form rule of `snowjax._wheel.contact`);
+      front region of the rim (default none; `WongSnow`'s, and a `Rut`'s on a law that
+      offers `rim_integrals_to`).  With them the solver starts from the closed-form
+      load balance without shear and subtracts the singularity of the normal stress at
+      the axle of a wheel on the base (the closed-form rule of
+      `snowjax._wheel.front_rim`); `closed_form_rim()` says whether a law offers them;
+    - `rim_integrals_to(angle, diameter, clearance)`: the same integrals from the axle to
+      any angle (default none; `WongSnow`'s), with which a `Rut` on the law writes its
+      own;
     - `sinkage_at_pressure(pressure, width, limit)`: the inverse of the law, the sinkage
       at which it reaches a pressure (default: bisection; closed forms for the built-in
       laws), used by a deflecting tyre (`DeflectingTire`) to place its flattened tread;
@@ -129,6 +133,24 @@ class AbstractTerrain(eqx.Module):
         A law that offers them has a base at a finite `depth` and also overrides
         `pressure_at_clearance`.
         """
+        return None
+
+    def closed_form_rim(self) -> bool:
+        """Whether the law offers `front_rim_integrals` (static): whether the class
+        overrides it."""
+        return type(self).front_rim_integrals is not AbstractTerrain.front_rim_integrals
+
+    def rim_integrals_to(
+        self,
+        angle: Float[ArrayLike, "..."],
+        diameter: Float[ArrayLike, "..."],
+        clearance: Float[ArrayLike, "..."],
+    ) -> tuple[Array, Array] | None:
+        """Closed forms of `int_0^angle sigma cos(theta) dtheta` and `int_0^angle sigma
+        sin(theta) dtheta` [Pa] on a rim of diameter D [m] whose lowest point lies
+        `clearance` [m] above the base, from the lowest point to any `angle` [rad] below
+        the entry angle (where sigma need not be 0); None (the default) if the law offers
+        none.  A law that offers them offers `front_rim_integrals` too."""
         return None
 
     def pressure_at_clearance(

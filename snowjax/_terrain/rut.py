@@ -191,6 +191,51 @@ class Rut(AbstractTerrain):
         line = self.pressure(jnp.where(reloading, sinkage, 0.0), width)
         return jnp.where(reloading, line, virgin)
 
+    def closed_form_rim(self) -> bool:
+        """Where the virgin law offers its rim integrals to any angle (`rim_integrals_to`:
+        `WongSnow`) and has no breakpoint of its own: the reloading line adds one kink,
+        which the closed-form rule cuts its panels at (static)."""
+        virgin = type(self.virgin)
+        return (
+            virgin.rim_integrals_to is not AbstractTerrain.rim_integrals_to
+            and virgin.breakpoint_sinkages is AbstractTerrain.breakpoint_sinkages
+        )
+
+    def front_rim_integrals(self, entry_angle, diameter, clearance):
+        """Exact `int_0^theta0 sigma' cos` and `int_0^theta0 sigma' sin` [Pa] on the rim
+        (`AbstractTerrain.front_rim_integrals`), for a virgin law that offers
+        `rim_integrals_to` (`closed_form_rim`).
+
+        The rim point at theta is z' = D [sin^2(theta0 / 2) - sin^2(theta / 2)] below the
+        floor: the virgin law holds from the axle to theta_d, where z' = d, at the rim
+        point's own clearance above the base (the virgin's `rim_integrals_to`), and the
+        reloading line sigma' = (p_u / d) z' from theta_d to theta0, whose integrals are
+        `(p_u / d) r [(theta0 - theta_d) / 2 + (sin 2 theta0 - sin 2 theta_d) / 4 - cos
+        theta0 (sin theta0 - sin theta_d)]` and `(p_u / d) r (cos theta_d - cos
+        theta0)^2 / 2`.  Where z' < d everywhere theta_d = 0; a rut of zero depth has
+        theta_d = theta0.  The virgin law's closed forms take no width (p_u is the
+        virgin's at the earlier wheel's width, as the protocol's laws are
+        width-independent).
+        """
+        d = self.reloading_depth
+        p_u = self.virgin.pressure(self.rut_sinkage, self.width)
+        slope = jnp.where((d > 0) & jnp.isfinite(p_u), p_u / jnp.where(d > 0, d, 1.0), 0.0)
+        s_0 = jnp.sin(entry_angle / 2) ** 2
+        s_d = s_0 - d / diameter
+        inside = s_d > 0
+        s_d = jnp.where(inside, s_d, 0.0)
+        theta_d = jnp.where(inside, 2 * jnp.arcsin(jnp.sqrt(jnp.where(inside, s_d, 1.0))), 0.0)
+        cos_v, sin_v = self.virgin.rim_integrals_to(theta_d, diameter, clearance)
+        cos_0 = 1 - 2 * s_0
+        r = diameter / 2
+        cos_line = (
+            (entry_angle - theta_d) / 2
+            + (jnp.sin(2 * entry_angle) - jnp.sin(2 * theta_d)) / 4
+            - cos_0 * (jnp.sin(entry_angle) - jnp.sin(theta_d))
+        )
+        sin_line = 2 * (s_0 - s_d) ** 2  # (cos theta_d - cos theta0)^2 / 2
+        return cos_v + slope * r * cos_line, sin_v + slope * r * sin_line
+
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """d, where reloading meets the virgin law, and the virgin law's own, shifted."""
         d = self.reloading_depth

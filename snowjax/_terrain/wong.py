@@ -74,6 +74,26 @@ def _safe_sqrt(x):
     return jnp.where(positive, jnp.sqrt(jnp.where(positive, x, 1.0)), 0.0)
 
 
+def _xlogx(x):
+    """x ln x, 0 at x = 0 (finite gradient)."""
+    positive = x > 0
+    return jnp.where(positive, x * jnp.log(jnp.where(positive, x, 1.0)), 0.0)
+
+
+def _sin2_over_z(angle, z0_rel, a):
+    """a int_0^angle sin^2 / Z dtheta [-], Z = Z0 + 2 a sin^2(theta / 2) (the rim in Wong's
+    law, `WongSnow.front_rim_integrals`): sin + A angle / a - 2 sqrt(A^2 - a^2) / a
+    atan(sqrt((A + a) / (A - a)) tan(angle / 2)), A = Z0 + a, written without the
+    cancellation of A - a = Z0."""
+    sq_z0 = _safe_sqrt(z0_rel)
+    sq_2a = jnp.sqrt(z0_rel + 2 * a)
+    rise = sq_2a * jnp.tan(angle / 2)
+    # No contact on the base (angle 0, Z0 0: a rut pressed to it) has a finite gradient.
+    some = (rise > 0) | (sq_z0 > 0)
+    turn = jnp.where(some, jnp.arctan2(jnp.where(some, rise, 1.0), sq_z0), 0.0)
+    return jnp.sin(angle) + (z0_rel + a) * angle / a - 2 * sq_z0 * sq_2a / a * turn
+
+
 class WongSnow(AbstractTerrain):
     """Shallow snow described by Wong's pressure–sinkage law and Mohr–Coulomb shear.
 
@@ -141,16 +161,26 @@ class WongSnow(AbstractTerrain):
         """
         z0_rel = clearance / self.z_w
         a = diameter / (2 * self.z_w)
-        sq_z0 = _safe_sqrt(z0_rel)
-        sq_2a = jnp.sqrt(z0_rel + 2 * a)
-        big_a = z0_rel + a
-        angle = jnp.arctan2(sq_2a * jnp.tan(entry_angle / 2), sq_z0)
-        cos_integral = self.p_w * (
-            jnp.sin(entry_angle) + big_a * entry_angle / a - 2 * sq_z0 * sq_2a / a * angle
-        )
-        positive = z0_rel > 0
-        xlogx = jnp.where(positive, z0_rel * jnp.log(jnp.where(positive, z0_rel, 1.0)), 0.0)
-        return cos_integral, self.p_w / a * (1 - z0_rel + xlogx)
+        cos_integral = self.p_w * _sin2_over_z(entry_angle, z0_rel, a)
+        return cos_integral, self.p_w / a * (1 - z0_rel + _xlogx(z0_rel))
+
+    def rim_integrals_to(self, angle, diameter, clearance):
+        """Exact `int_0^angle sigma cos` and `int_0^angle sigma sin` [Pa] on a rim of
+        diameter D [m] whose lowest point lies `clearance` [m] above the base, for any
+        `angle` [rad] in [0, pi) (`front_rim_integrals` at angle = theta0, where sigma is
+        0).  By parts as there, with the boundary term sigma(angle) sin(angle):
+        `int sigma cos = sigma(angle) sin(angle) + p_w a int_0^angle sin^2 / Z`, and
+        `int sigma sin = (p_w / a)[Z ln Z - Z] from Z(angle) to Z0`.
+        """
+        z0_rel = clearance / self.z_w
+        a = diameter / (2 * self.z_w)
+        z_end = z0_rel + 2 * a * jnp.sin(angle / 2) ** 2
+        # sigma(angle) sin(angle), 0 at angle = 0 (finite there also on the base, Z = 0).
+        above = z_end > 0
+        boundary = jnp.where(above, -self.p_w * jnp.log(jnp.where(above, z_end, 1.0)), 0.0)
+        cos_integral = boundary * jnp.sin(angle) + self.p_w * _sin2_over_z(angle, z0_rel, a)
+        sin_integral = self.p_w / a * (_xlogx(z0_rel) - z0_rel - _xlogx(z_end) + z_end)
+        return cos_integral, sin_integral
 
     @classmethod
     def reference(cls) -> "WongSnow":

@@ -113,23 +113,21 @@ QUADRATIC_REGIME = 1e-3
 PREDICTION_MARGIN = 0.1
 
 
-def _finished(
-    previous: _BracketState, state: _BracketState, y, atol, rtol
-) -> tuple[Array, Array]:
+def _finished(previous: _BracketState, state: _BracketState, y, atol, rtol) -> tuple[Array, Array]:
     """Per element, after the step from `previous` to `state` and `y`: (converged,
     collapsed: the bracket is narrower than atol + rtol |y|), each latched once true.
 
-    Converged: |f| <= atol at the step's start and the step below atol + rtol |y|; or, after two Newton steps
-    in a row with |f| <= `QUADRATIC_REGIME` before the last, the residual at the new
-    iterate predicted by their quadratic convergence, |f(y_k)| ~ |f(y_{k-1})| (d_k /
-    d_{k-1})^2, below `PREDICTION_MARGIN` atol.  The prediction saves the evaluation
-    that would only confirm it where every element of a batch gets there in time
-    (measured on the thesis tyre: the batch of the rim on Wong snow, and of the rim at a
-    slip angle there, 2 Newton steps instead of 3; Bekker's snow with Wong–Reece 4
-    instead of 5; its front region 4 either way); `solve_wheel` checks the balance at
-    the root itself (its final quadrature) and reports `NOT_CONVERGED` where it is off
-    by more than 10 atol.  Computed once per step and carried in the state, so that the
-    loop's test reads it.
+    Converged: |f| <= atol at the step's start and the step below atol + rtol |y|; or,
+    after two Newton steps in a row with |f| <= `QUADRATIC_REGIME` before the last, the
+    residual at the new iterate predicted by their quadratic convergence, |f(y_k)| ~
+    |f(y_{k-1})| (d_k / d_{k-1})^2, below `PREDICTION_MARGIN` atol.  The prediction
+    saves the evaluation that would only confirm it where every element of a batch gets
+    there in time (measured on the thesis tyre: the batch of the rim on Wong snow, and
+    of the rim at a slip angle there, 2 Newton steps instead of 3; Bekker's snow with
+    Wong–Reece 4 instead of 5; its front region 4 either way); `solve_wheel` checks the
+    balance at the root itself (its final quadrature) and reports `NOT_CONVERGED` where
+    it is off by more than 10 atol.  Computed once per step and carried in the state,
+    so that the loop's test reads it.
     """
     scale = atol + rtol * jnp.abs(y)
     f = jnp.abs(state.f)

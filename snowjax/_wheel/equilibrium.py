@@ -186,6 +186,10 @@ def _solve_layout(
         w = contact(_theta_from_s(s, th_cap), *element, vertical_only=True)
         return jnp.where(held, 0.0, _balance_residual(w, tgt))
 
+    # A start that is not finite (a layer of no depth, a rut pressed to the base, where
+    # the closed-form start divides by its cap) would stop the whole batch's iteration:
+    # such an element starts at its bracket's shallow end.
+    s0 = jnp.where(jnp.isfinite(s0), s0, upper)
     s = solve_elementwise(
         residual,
         jnp.clip(s0, lower, upper),
