@@ -225,7 +225,10 @@ class Rut(AbstractTerrain):
         inside = s_d > 0
         s_d = jnp.where(inside, s_d, 0.0)
         theta_d = jnp.where(inside, 2 * jnp.arcsin(jnp.sqrt(jnp.where(inside, s_d, 1.0))), 0.0)
-        cos_v, sin_v = self.virgin.rim_integrals_to(theta_d, diameter, clearance)
+        virgin = self.virgin.rim_integrals_to(theta_d, diameter, clearance)
+        if not virgin:
+            raise TypeError(f"{type(self.virgin).__name__} offers no rim_integrals_to")
+        cos_v, sin_v = virgin
         cos_0 = 1 - 2 * s_0
         r = diameter / 2
         cos_line = (
