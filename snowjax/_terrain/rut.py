@@ -192,9 +192,10 @@ class Rut(AbstractTerrain):
         return jnp.where(reloading, line, virgin)
 
     def closed_form_rim(self) -> bool:
-        """Where the virgin law offers its rim integrals to any angle (`rim_integrals_to`:
-        `WongSnow`) and has no breakpoint of its own: the reloading line adds one kink,
-        which the closed-form rule cuts its panels at (static)."""
+        """Whether the rut offers closed forms of its rim integrals (static): where the
+        virgin law offers them to any angle (`rim_integrals_to`: `WongSnow`) and has no
+        breakpoint of its own (the reloading line adds one kink, where the closed-form
+        rule cuts its panels)."""
         virgin = type(self.virgin)
         return (
             virgin.rim_integrals_to is not AbstractTerrain.rim_integrals_to
