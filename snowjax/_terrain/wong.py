@@ -80,17 +80,20 @@ def _xlogx(x):
     return jnp.where(positive, x * jnp.log(jnp.where(positive, x, 1.0)), 0.0)
 
 
-def _sin2_over_z(angle, z0_rel, a):
+def _sin2_over_z(angle, z0_rel, a, guard=False):
     """a int_0^angle sin^2 / Z dtheta [-], Z = Z0 + 2 a sin^2(theta / 2) (the rim in Wong's
     law, `WongSnow.front_rim_integrals`): sin + A angle / a - 2 sqrt(A^2 - a^2) / a
     atan(sqrt((A + a) / (A - a)) tan(angle / 2)), A = Z0 + a, written without the
-    cancellation of A - a = Z0."""
+    cancellation of A - a = Z0.  `guard`: a finite gradient also with no contact on the
+    base (angle 0, Z0 0: a rut pressed to it)."""
     sq_z0 = _safe_sqrt(z0_rel)
     sq_2a = jnp.sqrt(z0_rel + 2 * a)
     rise = sq_2a * jnp.tan(angle / 2)
-    # No contact on the base (angle 0, Z0 0: a rut pressed to it) has a finite gradient.
-    some = (rise > 0) | (sq_z0 > 0)
-    turn = jnp.where(some, jnp.arctan2(jnp.where(some, rise, 1.0), sq_z0), 0.0)
+    if guard:
+        some = (rise > 0) | (sq_z0 > 0)
+        turn = jnp.where(some, jnp.arctan2(jnp.where(some, rise, 1.0), sq_z0), 0.0)
+    else:
+        turn = jnp.arctan2(rise, sq_z0)
     return jnp.sin(angle) + (z0_rel + a) * angle / a - 2 * sq_z0 * sq_2a / a * turn
 
 
@@ -178,7 +181,8 @@ class WongSnow(AbstractTerrain):
         # sigma(angle) sin(angle), 0 at angle = 0 (finite there also on the base, Z = 0).
         above = z_end > 0
         boundary = jnp.where(above, -self.p_w * jnp.log(jnp.where(above, z_end, 1.0)), 0.0)
-        cos_integral = boundary * jnp.sin(angle) + self.p_w * _sin2_over_z(angle, z0_rel, a)
+        turn = _sin2_over_z(angle, z0_rel, a, guard=True)
+        cos_integral = boundary * jnp.sin(angle) + self.p_w * turn
         sin_integral = self.p_w / a * (_xlogx(z0_rel) - z0_rel - _xlogx(z_end) + z_end)
         return cos_integral, sin_integral
 

@@ -265,9 +265,7 @@ def _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance):
     if not law.mobilises:
         zero = jnp.zeros_like(theta0)
         return zero, zero
-    tiny = jnp.finfo(clearance.dtype).tiny  # a layer of no depth (a rut pressed to the base)
-    lift = jnp.maximum(1e-30 * terrain.depth, tiny)
-    sigma0 = terrain.pressure_at_clearance(jnp.maximum(clearance, lift), width)
+    sigma0 = terrain.pressure_at_clearance(jnp.maximum(clearance, 1e-30 * terrain.depth), width)
     modulus = terrain.shear_modulus
 
     def along_rim(theta):
@@ -308,11 +306,15 @@ def _closed_form_contact(
     clearance = _clearance(theta0, diameter, terrain)
     if bottomed is not None:
         clearance = jnp.where(bottomed, 0.0, clearance)
-    # A layer of no depth (a rut pressed to the base) has no contact: theta0 = 0, every node
-    # on the base, where the stress is taken at the least positive clearance.
-    layer = terrain.depth > 0
-    z0_rel = jnp.where(layer, clearance / jnp.where(layer, terrain.depth, 1.0), 0.0)
-    kinks = (_kink_angle(theta0, diameter, terrain),) if _kinked(terrain) else ()
+    z0_rel = clearance / terrain.depth
+    kinks = ()
+    if _kinked(terrain):
+        kinks = (_kink_angle(theta0, diameter, terrain),)
+        # A rut's layer may have no depth (pressed to the base): no contact, theta0 = 0,
+        # every node on the base, where the stress is taken at the least positive
+        # clearance.
+        layer = terrain.depth > 0
+        z0_rel = jnp.where(layer, clearance / jnp.where(layer, terrain.depth, 1.0), 0.0)
     theta, weight, pieces = _nodes(theta0, slip, diameter, terrain, law, z0_rel, n, braking, kinks)
     # With `moving_rule` the rule moves with theta0 (a factor 1 in value), so that
     # derivatives w.r.t. theta0 of every order are those of the rule on [0, theta0]; a
@@ -323,7 +325,7 @@ def _closed_form_contact(
     sin = 2 * half_sin * half_cos
     cos = 1 - 2 * half_sin**2
     height = clearance + diameter * half_sin**2
-    if kinks:  # a rut's layer may have no depth: every node on the base
+    if kinks:  # (a rut's layer of no depth)
         height = jnp.maximum(height, jnp.finfo(height.dtype).tiny)
     sigma = terrain.pressure_at_clearance(height, width)
     j = _shear_displacement(theta, theta0, slip, r, sin, jnp.sin(theta0))
@@ -345,7 +347,8 @@ def _closed_form_contact(
     # sin theta or tan phi g (cos theta); remove sigma (h(0) cos + h'(0) sin), whose
     # integral is known in closed form, leaving a remainder that vanishes like
     # theta^2 ln theta at the singular end.
-    g0, g1 = _axle_mobilisation(theta0, slip, diameter, width, terrain, law, clearance)
+    lowest = jnp.maximum(clearance, jnp.finfo(clearance.dtype).tiny) if kinks else clearance
+    g0, g1 = _axle_mobilisation(theta0, slip, diameter, width, terrain, law, lowest)
     tp = terrain.tan_phi
     # Blend weight: 1 near bottoming (where it is needed), ~4 (z0/z_w)^2 for shallow
     # sinkage, where the closed forms lose digits to cancellation.
