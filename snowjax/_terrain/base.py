@@ -28,6 +28,13 @@ def _clip_negative(x) -> Array:
     return jnp.where(x >= 0, x, 0.0)
 
 
+def _half_angle_arc(s) -> Array:
+    """2 asin(sqrt(s)) [rad] for s > 0 (the rim angle whose sin^2(theta / 2) is s), 0
+    (with a zero gradient) elsewhere."""
+    inside = s > 0
+    return jnp.where(inside, 2 * jnp.arcsin(jnp.sqrt(jnp.where(inside, s, 1.0))), 0.0)
+
+
 def _safe_power(x: Array, n: Array) -> Array:
     """`x**n` for x >= 0 whose value *and gradient* are finite at x = 0."""
     positive = x > 0

@@ -57,7 +57,7 @@ import jax.numpy as jnp
 from jaxtyping import Array, Float
 
 from .._leaves import _as_float, parameter
-from .base import AbstractTerrain
+from .base import AbstractTerrain, _half_angle_arc
 
 __all__ = ["Rut"]
 
@@ -222,10 +222,8 @@ class Rut(AbstractTerrain):
         p_u = self.virgin.pressure(self.rut_sinkage, self.width)
         slope = jnp.where((d > 0) & jnp.isfinite(p_u), p_u / jnp.where(d > 0, d, 1.0), 0.0)
         s_0 = jnp.sin(entry_angle / 2) ** 2
-        s_d = s_0 - d / diameter
-        inside = s_d > 0
-        s_d = jnp.where(inside, s_d, 0.0)
-        theta_d = jnp.where(inside, 2 * jnp.arcsin(jnp.sqrt(jnp.where(inside, s_d, 1.0))), 0.0)
+        s_d = jnp.maximum(s_0 - d / diameter, 0.0)
+        theta_d = _half_angle_arc(s_0 - d / diameter)
         virgin = self.virgin.rim_integrals_to(theta_d, diameter, clearance)
         if not virgin:
             raise TypeError(f"{type(self.virgin).__name__} offers no rim_integrals_to")

@@ -51,7 +51,7 @@ from typing import ClassVar
 import jax
 import jax.numpy as jnp
 
-from .._terrain.base import AbstractTerrain
+from .._terrain.base import AbstractTerrain, _half_angle_arc
 from .distribution import _is_front
 from .general import (
     AbstractGeneralRule,
@@ -102,12 +102,6 @@ def _kink_angle(theta0, diameter, terrain):
     0 where the contact stays above d (4.5 in half angles)."""
     (d,) = terrain.breakpoint_sinkages()
     return _half_angle_arc(jnp.sin(theta0 / 2) ** 2 - d / diameter)
-
-
-def _half_angle_arc(s):
-    """2 asin(sqrt(s)) [rad] for s > 0, 0 (with a zero gradient) elsewhere."""
-    inside = s > 0
-    return jnp.where(inside, 2 * jnp.arcsin(jnp.sqrt(jnp.where(inside, s, 1.0))), 0.0)
 
 
 def _sinh_panel(t, w, lo, hi, scale, toward_hi):
@@ -236,13 +230,12 @@ def _moving(theta, weight, theta0, kinks, pieces, moving_rule):
     (a derivative that moves it, e.g. w.r.t. a rut's depth, then carries the jump of the
     integrand's slope there at second order, as the any-terrain rule's breakpoints do)
     and the others scaled with theta0 with `moving_rule`."""
-    stretch = theta0 / jax.lax.stop_gradient(theta0)
+    if moving_rule:
+        stretch = theta0 / jax.lax.stop_gradient(theta0)
+    else:
+        stretch = jnp.ones_like(theta0)
     if not pieces:
-        if not moving_rule:
-            return theta, weight
-        return theta * stretch, weight * stretch
-    if not moving_rule:
-        stretch = jnp.ones_like(stretch)
+        return (theta * stretch, weight * stretch) if moving_rule else (theta, weight)
     (kink,) = kinks
     xs, ws, k = [], [], 0
     for size, lo, hi, lo_kink, hi_kink in pieces:
