@@ -307,6 +307,33 @@ def test_second_derivatives_match_central_differences():
     np.testing.assert_allclose(second, fd, rtol=1e-5)
 
 
+@pytest.mark.slow  # second derivatives, compiled (make test-slow)
+def test_second_derivatives_wrt_the_base_depth_match_central_differences():
+    """d2R/dz_w2 on virgin snow and d2R/dz_u2 on a rut (the rut's depth also moves its
+    kink), forward-over-reverse as `jax.hessian` takes them, against central differences
+    of the exact gradient.  The depth moves the entry angle's cap, so at a fixed solver
+    variable it moves theta0: the pass along the parameters once moved theta0 with the
+    quadrature's nodes fixed, whose own derivative drops a Leibniz term (d2R/dz_w2 was
+    8,552 against -5,676; a rut in reloading everywhere -110,397 against -51,986)."""
+
+    def on_snow(z_w, load):
+        snow = sj.WongSnow(FRESH.p_w, z_w, FRESH.cohesion, FRESH.tan_phi, FRESH.shear_modulus)
+        return sj.solve_wheel(THESIS_WHEEL, snow, load, 0.3).motion_resistance
+
+    def on_rut(z_u, load):
+        rut = sj.Rut(FRESH, z_u, THESIS_WHEEL.width, 1e6, 5e6)
+        return sj.solve_wheel(THESIS_WHEEL, rut, load, -0.2).motion_resistance
+
+    cases = [(on_snow, 0.2, 3000.0), (on_snow, 0.15, 1500.0)]
+    cases += [(on_rut, 0.12, 3000.0), (on_rut, 0.05, 3000.0), (on_rut, 0.17, 1500.0)]
+    for resistance, depth, load in cases:
+        grad = jax.jit(jax.grad(resistance))
+        second = jax.jit(jax.hessian(resistance))(jnp.asarray(depth), jnp.asarray(load))
+        h = 1e-6
+        fd = (grad(depth + h, load) - grad(depth - h, load)) / (2 * h)
+        np.testing.assert_allclose(second, fd, rtol=1e-6, err_msg=f"{resistance.__name__}")
+
+
 @pytest.mark.parametrize("shear", ["classic", pytest.param("simplified", marks=pytest.mark.slow)])
 def test_gradients_match_central_differences(shear):
     p0 = dict(

@@ -200,12 +200,11 @@ def _solve_layout(
         max_steps,
     )
 
-    def forces(s, masks, params, moving_rule=False):  # (theta0, W, R, T, M, F_y, M_z) at s
-        over, bottomed = masks
-        th_cap, *element = params
-        theta0 = jnp.where(over, th_cap, _theta_from_s(s, th_cap))
-        out = contact(theta0, *element, bottomed=bottomed, moving_rule=moving_rule)
-        return (theta0, *cast(tuple, out))
+    def entry(s, over, th_cap):  # theta0 at s (held at the cap where over it)
+        return jnp.where(over, th_cap, _theta_from_s(s, th_cap))
+
+    def forces(theta0, bottomed, element, moving_rule=False):  # (W, R, T, M, F_y, M_z)
+        return contact(theta0, *element, bottomed=bottomed, moving_rule=moving_rule)
 
     # Derivatives at the root: w.r.t. the load where balanced (the targets of elements
     # held at the cap do not enter their outputs).
@@ -215,10 +214,10 @@ def _solve_layout(
     root = (
         (over, over & reaches_base),
         load,
-        (theta_cap, slip, wheel, terrain, distribution, running, terms),
+        (theta_cap, (slip, wheel, terrain, distribution, running, terms)),
     )
-    s = _implicit_root(jax.lax.stop_gradient(s), *root, forces=forces)
-    theta0, w, r, t, m, fy, mz = _root_outputs(s, *root, forces=forces)
+    s = _implicit_root(jax.lax.stop_gradient(s), *root, entry=entry, forces=forces)
+    theta0, w, r, t, m, fy, mz = _root_outputs(s, *root, entry=entry, forces=forces)
     balanced = jnp.abs(w / target - 1) <= 10 * tol  # 1e-8 in float64
     status = jnp.where(
         over,
