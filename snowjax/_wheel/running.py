@@ -10,8 +10,8 @@ of `lateral.py`, optionally the sidewall bulldozing).  Each says
   quadrature grades its nodes to (`entry_scale`),
 - tan(beta) of its slip angle for the force terms (`ContactNodes.tan_slip_angle`),
 - its validity rules and the stand-in for invalid elements (`rules`, `safe`),
-- and whether the straight-running contact rules apply (`straight`: the closed-form
-  accelerations of `front_rim.py` take only a wheel running straight).
+- and whether it runs straight (`straight`: any shear law applies; at a slip angle only
+  one with a lateral counterpart, `AbstractShearLaw.lateral`).
 """
 
 from __future__ import annotations

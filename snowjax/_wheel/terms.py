@@ -185,27 +185,38 @@ class TerrainStresses(AbstractForceTerm):
     lateral_modulus: Array | None = None
     combined: bool = eqx.field(static=True, default=False)
 
-    def forces(self, nodes):
-        if not self.law.mobilises:
-            return nodes.integrate(normal=nodes.sigma)
-        contact = nodes.contact
-        theta0, diameter = contact.entry_angle, contact.wheel.diameter
-        strength = nodes.cohesion + nodes.sigma * nodes.tan_phi
-        j, k = nodes.shear_displacement, nodes.modulus
+    def shares(self, j, j_y, modulus, sigma, theta0, slip, diameter, terrain):
+        """(g_x, g_y) [-]: the shares of the strength c + sigma tan phi mobilised along the
+        contact and along the axle at shear displacements j [m] along the rim (4.10) and
+        j_y [m] along the axle (`lateral.py`; unused running straight, where g_y = 0),
+        modulus K [m] and normal stress sigma [Pa], of a wheel of diameter D [m] at
+        entry angle theta0 [rad] and slip i [-] on `terrain`."""
         if not self.combined:
-            g = self.law.mobilisation(
-                j, k, nodes.sigma, theta0, nodes.slip, diameter, nodes.terrain
-            )
-            return nodes.integrate(normal=nodes.sigma, shear=strength * g)
-        travel = theta0 - nodes.theta - nodes.points.shortening
+            g = self.law.mobilisation(j, modulus, sigma, theta0, slip, diameter, terrain)
+            return g, jnp.zeros_like(g)
+        k_y = _lateral_modulus(self.lateral_modulus, modulus)
+        return self.law.combined_mobilisation(
+            j / modulus, j_y / k_y, sigma, theta0, slip, diameter, terrain
+        )
+
+    def stresses(self, nodes) -> tuple[Array, ArrayLike, ArrayLike]:
+        """(normal, shear along the contact forwards, lateral along the axle) stresses
+        [Pa] at the nodes; the shear and lateral stresses are the number 0 where there
+        are none (`ContactNodes.integrate` skips them)."""
+        if not self.law.mobilises:
+            return nodes.sigma, 0.0, 0.0
+        travel = nodes.contact.entry_angle - nodes.theta - nodes.points.shortening
         j_y = nodes.radius * (1 - nodes.slip) * travel * nodes.tan_slip_angle
-        k_y = _lateral_modulus(self.lateral_modulus, k)
-        share_x, share_y = self.law.combined_mobilisation(
-            j / k, j_y / k_y, nodes.sigma, theta0, nodes.slip, diameter, nodes.terrain
-        )
-        return nodes.integrate(
-            normal=nodes.sigma, shear=strength * share_x, lateral=strength * share_y
-        )
+        g_x, g_y = self.shares(
+            nodes.shear_displacement, j_y, nodes.modulus, nodes.sigma,
+            nodes.contact.entry_angle, nodes.slip, nodes.contact.wheel.diameter, nodes.terrain,
+        )  # fmt: skip
+        strength = nodes.cohesion + nodes.sigma * nodes.tan_phi
+        return nodes.sigma, strength * g_x, strength * g_y if self.combined else 0.0
+
+    def forces(self, nodes):
+        normal, shear, lateral = self.stresses(nodes)
+        return nodes.integrate(normal=normal, shear=shear, lateral=lateral)
 
 
 class SidewallBulldozing(AbstractForceTerm):
