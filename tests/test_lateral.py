@@ -284,6 +284,37 @@ def test_gradients_wrt_every_leaf_match_central_differences():
         assert np.all(np.abs(np.asarray(flat_rev[k]) - got) <= 1e-9 * (np.abs(got) + scale)), k
 
 
+@pytest.mark.slow  # two compiled Jacobians (make test-slow)
+def test_gradients_at_small_slip_angles_on_a_braked_wheel_match_central_differences():
+    """A braked wheel whose shear displacement changes sign near the axle, at slip angles
+    that round that kink over a few % of the contact (the lane change of
+    tests/test_planar.py: slip -0.08 to -0.11, 1.5 kN, |beta| <= 1e-3 rad): d(drawbar
+    pull, F_y, M_z) / d(p_w, beta) by forward mode against central differences.  With
+    the straight layer's grading at the split (10 uniform nodes over 0.3 rad) dF_y/dp_w
+    was 1.4e-3 off and d(drawbar pull)/d(beta) 18 %."""
+    cases = np.array([[-0.079, 5e-4], [-0.105, 1e-4], [-0.113, -5e-4], [-0.09, 1e-3]])
+    base = SHIPPED_SNOWS["fresh"]
+
+    def outputs(p_w, slip, beta):
+        snow = sj.WongSnow(p_w, base.z_w, base.cohesion, base.tan_phi, base.shear_modulus)
+        st = sj.solve_wheel(WHEEL, snow, 1500.0, slip, slip_angle=beta)
+        return jnp.stack([st.drawbar_pull, st.lateral_force, st.aligning_torque])
+
+    p_w = np.full(len(cases), float(base.p_w))
+    slip, beta = cases[:, 0], cases[:, 1]
+    f = jax.jit(jax.vmap(outputs))
+    jac = jax.jit(jax.vmap(jax.jacfwd(outputs, argnums=(0, 2))))(p_w, slip, beta)
+    h_p, h_b = 1e-5 * p_w, 1e-3 * np.abs(beta)
+    fd = [
+        (np.asarray(f(p_w + h_p, slip, beta)) - np.asarray(f(p_w - h_p, slip, beta)))
+        / (2 * h_p[:, None]),
+        (np.asarray(f(p_w, slip, beta + h_b)) - np.asarray(f(p_w, slip, beta - h_b)))
+        / (2 * h_b[:, None]),
+    ]
+    for got, want in zip(jac, fd):
+        np.testing.assert_allclose(np.asarray(got), want, rtol=1e-5, atol=1e-9)
+
+
 # --------------------------------------------------------------------------------------
 # Inputs, batching, float32
 # --------------------------------------------------------------------------------------

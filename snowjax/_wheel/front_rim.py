@@ -120,15 +120,16 @@ def _graded_or_empty(t, w, lo, hi, scale, stand_in):
     return jnp.where(filled, x, hi), jnp.where(filled, jac, 0.0)
 
 
-def _nodes(theta0, slip, diameter, terrain, law, z0_rel, n, entry_scale, braking=True, kinks=()):
+def _nodes(theta0, slip, diameter, terrain, law, z0_rel, n, scales, braking=True, kinks=()):
     """Graded composite Gauss–Legendre nodes and weights on [0, theta0] (no gradient), and
     their pieces for `_moving` (none without a kink).
 
     `braking=False` (valid when slip >= 0, where the shear stress has one sign): two
     panels of n nodes, [0, theta0/2] with a quadratic map clustering nodes at the log
     singularity theta = 0 and [theta0/2, theta0] with a sinh map clustering them in the
-    shear layer behind the entry angle (`entry_scale` [rad], its width: the running's
-    `entry_scale`).  `braking=True`: four panels
+    shear layer behind the entry angle (`scales` = (entry_scale [rad], its width: the
+    running's `entry_scale`; lateral_rate [1/rad]: the running's `lateral_rate`)).
+    `braking=True`: four panels
     split at the sign change of the shear stress (or at theta0 / 2 when there is none),
     with sinh maps clustering nodes on both sides of it (`law.braking_panels`); `n` is
     then one count per panel, axle to entry (`AbstractShearLaw.nodes`).
@@ -142,9 +143,10 @@ def _nodes(theta0, slip, diameter, terrain, law, z0_rel, n, entry_scale, braking
     most nodes of a panel (zero weights where none does; under vmap each element's own
     panel).  Each piece is (nodes, lo, hi, lo at the kink, hi at the kink).
     """
-    theta0, slip, diameter, terrain, z0_rel, kinks, entry_scale = jax.lax.stop_gradient(
-        (theta0, slip, diameter, terrain, z0_rel, kinks, entry_scale)
+    theta0, slip, diameter, terrain, z0_rel, kinks, scales = jax.lax.stop_gradient(
+        (theta0, slip, diameter, terrain, z0_rel, kinks, scales)
     )
+    entry_scale, lateral_rate = scales
     zero = jnp.zeros_like(theta0)
     if not braking:
         t, w = _rule(n, theta0.dtype)
@@ -168,7 +170,7 @@ def _nodes(theta0, slip, diameter, terrain, law, z0_rel, n, entry_scale, braking
         )  # fmt: skip
         return jnp.concatenate([low * u, x2, x3]), jnp.concatenate([low * du, w2, w3]), pieces
     b1, split, b3, scale2, scale3, scale4 = law.braking_panels(
-        theta0, slip, diameter, terrain, z0_rel, entry_scale
+        theta0, slip, diameter, terrain, z0_rel, entry_scale, lateral_rate
     )
     # Panel 1: [0, b1], quadratic map clustering at the log singularity theta = 0;
     # panels 2-4 (sinh maps): towards the split from below and above, and towards the
@@ -348,9 +350,12 @@ def _closed_form_contact(
         layer = terrain.depth > 0
         z0_rel = jnp.where(layer, clearance / jnp.where(layer, terrain.depth, 1.0), 0.0)
     modulus = terrain.shear_modulus
-    entry_scale = running.entry_scale(law, theta0, slip, diameter, terrain, modulus)
+    scales = (
+        running.entry_scale(law, theta0, slip, diameter, terrain, modulus),
+        running.lateral_rate(slip, diameter, modulus),
+    )
     theta, weight, pieces = _nodes(
-        theta0, slip, diameter, terrain, law, z0_rel, n, entry_scale, braking, kinks
+        theta0, slip, diameter, terrain, law, z0_rel, n, scales, braking, kinks
     )
     # With `moving_rule` the rule moves with theta0 (a factor 1 in value), so that
     # derivatives w.r.t. theta0 of every order are those of the rule on [0, theta0]; a
@@ -502,8 +507,10 @@ class FrontRimRule(AbstractContactRule):
     batch 1e5, one process, interleaved with the previous rule, the any-terrain
     quadrature with this start): 0.86-1.16x the time of the same batch running straight,
     where the any-terrain quadrature took 2.20-2.44x; braking slips 1.59-1.91x against
-    4.70-5.00x.  Against SciPy over 600 random cases (`tests/random_cases.py`, slip
-    angles to 60 degrees, a third braked): within 6e-9 of the load."""
+    4.70-5.00x, before `SteeredRimRule`'s 16 nodes beside the split, which cost 1.20x
+    at batch 1,000 of slips -0.3 to 0.9 (`benchmarks/compare.py`).  Against SciPy over
+    600 random cases (`tests/random_cases.py`, slip angles to 60 degrees, a third
+    braked): within 6e-9 of the load."""
 
     warm_layout: ClassVar[bool] = True
 
@@ -541,15 +548,33 @@ class FrontRimRule(AbstractContactRule):
         )  # fmt: skip
 
 
+SPLIT_NODES = 16
+
+
 class SteeredRimRule(FrontRimRule):
     """`FrontRimRule` at a slip angle, whose warm-started solve compiles only the
     four-panel layout: the rover in MJX, its main user, runs vmapped over environments,
     where the choice of layout per step (a `lax.cond`) becomes a select that runs both.
     Measured (`benchmarks/mjx.py`'s rollouts, 64 environments, 20 steps, one process
     each): the snow's part of the step 2.51x the MJX step with one layout, 3.34x with
-    both."""
+    both.
+
+    The four-panel layout's two panels beside a braked wheel's split take at least
+    `SPLIT_NODES` nodes: the slip angle rounds the kink there over a width that can be
+    a few % of the contact (`AbstractShearLaw.braking_panels`).  Measured on the lane
+    change of tests/test_planar.py (1.2-1.8 kN, slips -0.12 to -0.04, |beta| 1e-7 to
+    0.1 rad log-uniform, 300 cases), d(sinkage, drawbar pull, F_y, M_z) / d(p_w, load,
+    slip, beta) against the same rule at 48 nodes per panel: within 6.6e-8 (of 1 cm,
+    1 kN, 1 kN, 50 N m per unit of 10 % of each input) with 16 nodes; 1.3e-6 with 10;
+    3.2e-5 with 10 nodes and the straight layer's width at the split."""
 
     warm_layout: ClassVar[bool] = False
+
+    def law_nodes(self, law) -> tuple:
+        """The law's `nodes_closed_form`, with at least `SPLIT_NODES` on the two panels
+        beside the split."""
+        two, (axle, below, above, entry) = law.nodes_closed_form
+        return two, (axle, max(below, SPLIT_NODES), max(above, SPLIT_NODES), entry)
 
 
 def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:

@@ -54,6 +54,13 @@ class AbstractRunning(eqx.Module):
         surface."""
 
     @abc.abstractmethod
+    def lateral_rate(self, slip, diameter, k_surface) -> ArrayLike:
+        """|d(j_y / K_y) / d theta| [1/rad]: how fast the lateral displacement over its
+        modulus grows behind the entry angle (0 running straight), which smooths a
+        braked wheel's kink where j changes sign over a width of about that rate times
+        the distance to the entry (`AbstractShearLaw.braking_panels`)."""
+
+    @abc.abstractmethod
     def tan_slip_angle(self) -> ArrayLike:
         """tan(beta) [-] of the slip angle beta (0 running straight)."""
 
@@ -79,6 +86,9 @@ class Straight(AbstractRunning):
     def entry_scale(self, law, theta0, slip, diameter, terrain, k_surface) -> Array:
         return law.entry_layer(theta0, slip, diameter, terrain, k_surface)
 
+    def lateral_rate(self, slip, diameter, k_surface) -> ArrayLike:
+        return 0.0
+
     def tan_slip_angle(self) -> ArrayLike:
         return 0.0
 
@@ -103,10 +113,16 @@ class SlipAngle(AbstractRunning):
         if not law.mobilises:
             return jnp.full_like(theta0, jnp.inf)
         # Width of the layer where the resultant displacement u rises to ~1.
-        k_y = _lateral_modulus(self.lateral.shear_modulus, k_surface)
         entry_slope = _shear_displacement_slope(jnp.cos(theta0), slip)
-        rate = jnp.hypot(entry_slope / k_surface, (1 - slip) * self.tan_slip_angle() / k_y)
-        return 1 / (diameter / 2 * jnp.maximum(rate, 1e-12 / k_surface))
+        rate = jnp.hypot(
+            diameter / 2 * entry_slope / k_surface, self.lateral_rate(slip, diameter, k_surface)
+        )
+        return 1 / jnp.maximum(rate, 1e-12 * diameter / 2 / k_surface)
+
+    def lateral_rate(self, slip, diameter, k_surface) -> ArrayLike:
+        # j_y = r (1 - i) tan(beta) (theta0 - theta) (`lateral.py`).
+        k_y = _lateral_modulus(self.lateral.shear_modulus, k_surface)
+        return diameter / 2 * (1 - slip) * jnp.abs(self.tan_slip_angle()) / k_y
 
     def tan_slip_angle(self) -> ArrayLike:
         return jnp.tan(self.angle)

@@ -129,11 +129,13 @@ class AbstractShearLaw(eqx.Module):
         slope = _shear_displacement_slope(jnp.cos(theta0), slip)
         return _layer_width(modulus, diameter / 2, slope)
 
-    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
+    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale, lateral_rate):
         """Panels of the closed-form rule's four-panel layout: (b1, split, b3, scale2,
         scale3, scale4), the panels [0, b1], [b1, split], [split, b3], [b3, theta0] and
         the sinh scales [rad] of the last three (`z0_rel` = 1 - z0 / depth, the relative
-        distance of the lowest rim point to the base).
+        distance of the lowest rim point to the base; `entry_scale` [rad], the running's
+        width of the entry layer; `lateral_rate` [1/rad], the running's growth of
+        j_y / K_y behind the entry, 0 running straight).
 
         Default: the sign change of the shear displacement, the sign change of g for a
         law of j.  j(theta) / r = (theta0 - theta) - k (sin theta0 - sin theta),
@@ -146,10 +148,21 @@ class AbstractShearLaw(eqx.Module):
         entry layer width.  b3 is theta*, kept within the middle 60 % of [split,
         theta0]: each of the last two panels then holds one monotone branch of j.
         Without a sign change the split is theta0 / 2 and b3 the midpoint of [split,
-        theta0]."""
+        theta0].
+
+        At a slip angle the lateral displacement u_y = j_y / K_y (`lateral_rate` times
+        theta0 - split at the split) rounds the kink: |u| = hypot(u_x, u_y) turns over
+        |theta - split| ~ u_y K / (r |dj/dtheta|), so the two panels beside the split
+        cluster at that width, kept between 1 % of theta0 - split and the straight
+        layer's width (the rule at a slip angle gives these two panels 16 nodes,
+        `SteeredRimRule`)."""
         th, has_root, theta_star = _shear_sign_change(theta0, None, slip, 8, True)
         slope = _shear_displacement_slope(1 - 2 * _sincos_half(th)[0] ** 2, slip)
         split_scale = _layer_width(terrain.shear_modulus, diameter / 2, slope)
+        rounded = lateral_rate * (theta0 - th) * split_scale
+        split_scale = jnp.where(
+            rounded > 0, jnp.clip(rounded, 0.01 * (theta0 - th), split_scale), split_scale
+        )
         has_root = has_root & (th > _axle_gap(theta0.dtype) * theta0)
         split = jnp.where(has_root, th, theta0 / 2)
         gap = theta0 - split
@@ -254,7 +267,7 @@ class ThesisSimplified(AbstractShearLaw):
         cubic = jnp.abs(2 * slip - slip**2) * tau1 / 6
         return jnp.minimum(scale, 1 / (k1 * jnp.cbrt(cubic) + 1e-300))
 
-    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
+    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale, lateral_rate):
         """U0 = tau1 s (A - B s^2), s = sigma / c, A = i + tau2, B = (i^2 - 2i) / 6, is a
         cubic in s, and s falls monotonically from the axle to the entry, so every level
         of |U0| is reached at an angle known from a root of the cubic
@@ -344,7 +357,7 @@ class NoShear(AbstractShearLaw):
         """`inf`: no layer."""
         return jnp.full_like(theta0, jnp.inf)
 
-    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale):
+    def braking_panels(self, theta0, slip, diameter, terrain, z0_rel, entry_scale, lateral_rate):
         """Four equal panels (no shear stress, no layer to resolve)."""
         inf = jnp.full_like(theta0, jnp.inf)
         return theta0 / 4, theta0 / 2, 0.75 * theta0, inf, inf, inf
