@@ -564,9 +564,9 @@ class SteeredRimRule(FrontRimRule):
     a few % of the contact (`AbstractShearLaw.braking_panels`).  Measured on the lane
     change of tests/test_planar.py (1.2-1.8 kN, slips -0.12 to -0.04, |beta| 1e-7 to
     0.1 rad log-uniform, 300 cases), d(sinkage, drawbar pull, F_y, M_z) / d(p_w, load,
-    slip, beta) against the same rule at 48 nodes per panel: within 6.6e-8 (of 1 cm,
-    1 kN, 1 kN, 50 N m per unit of 10 % of each input) with 16 nodes; 1.3e-6 with 10;
-    3.2e-5 with 10 nodes and the straight layer's width at the split."""
+    slip, beta) against the same rule at 48 nodes per panel, times (p_w, the load, 0.1,
+    0.1 rad) over (1 cm, 1 kN, 1 kN, 50 N m): within 6.6e-8 with 16 nodes; 5.8e-7 with
+    10; 1.5e-5 with 10 nodes and the straight layer's width at the split."""
 
     warm_layout: ClassVar[bool] = False
 
