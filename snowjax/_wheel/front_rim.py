@@ -548,9 +548,6 @@ class FrontRimRule(AbstractContactRule):
         )  # fmt: skip
 
 
-SPLIT_NODES = 16
-
-
 class SteeredRimRule(FrontRimRule):
     """`FrontRimRule` at a slip angle, whose warm-started solve compiles only the
     four-panel layout: the rover in MJX, its main user, runs vmapped over environments,
@@ -560,7 +557,7 @@ class SteeredRimRule(FrontRimRule):
     both.
 
     The four-panel layout's two panels beside a braked wheel's split take at least
-    `SPLIT_NODES` nodes: the slip angle rounds the kink there over a width that can be
+    `split_nodes` nodes: the slip angle rounds the kink there over a width that can be
     a few % of the contact (`AbstractShearLaw.braking_panels`).  Measured on the lane
     change of tests/test_planar.py (1.2-1.8 kN, slips -0.12 to -0.04, |beta| 1e-7 to
     0.1 rad log-uniform, 300 cases), d(sinkage, drawbar pull, F_y, M_z) / d(p_w, load,
@@ -569,12 +566,15 @@ class SteeredRimRule(FrontRimRule):
     10; 1.5e-5 with 10 nodes and the straight layer's width at the split."""
 
     warm_layout: ClassVar[bool] = False
+    #: Least nodes of each of the two panels beside the split.
+    split_nodes: ClassVar[int] = 16
 
     def law_nodes(self, law) -> tuple:
-        """The law's `nodes_closed_form`, with at least `SPLIT_NODES` on the two panels
+        """The law's `nodes_closed_form`, with at least `split_nodes` on the two panels
         beside the split."""
         two, (axle, below, above, entry) = law.nodes_closed_form
-        return two, (axle, max(below, SPLIT_NODES), max(above, SPLIT_NODES), entry)
+        least = self.split_nodes
+        return two, (axle, max(below, least), max(above, least), entry)
 
 
 def _contact_rule(terrain, distribution, wheel, running) -> AbstractContactRule:
