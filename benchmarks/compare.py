@@ -112,6 +112,9 @@ def _rows() -> dict:
         "slip angle 0.1 rad, Wong–Reece": (wheel, snow, rear, 0.1),
         "slip angle 0.1 rad, Bekker snow (U.S.)": (wheel, bekker, None, 0.1),
     }
+    if hasattr(sj, "Rut"):  # a rut 8 cm deep, left by the same wheel, in Wong snow
+        rut = sj.Rut(snow, 0.08, wheel.width, 1e6, 5e6)
+        others["rut in Wong snow, front region"] = (wheel, rut, None, None)
     for label, (this_wheel, terrain, dist, angle) in others.items():
         solve = _solver(this_wheel, terrain, dist, angle)
         for n in (1, 1_000):

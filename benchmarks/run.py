@@ -457,6 +457,14 @@ def main(argv=None):
             "DeflectingTire 100 kPa on BekkerSoil.snow_us, front region": (
                 sj.BekkerSoil.snow_us(), None, 9, 0.0, None,
             ),
+            # Ruts 2-12 cm deep left in the thesis snow by the same wheel (k_0 = 1 MPa/m,
+            # A_u = 5 MPa/m^2, as benchmarks/ruts.py): against the Wong front-region row,
+            # the same wheel, loads and slips on the virgin snow.
+            "Rut of WongSnow (2-12 cm), front region": (
+                sj.Rut(SNOW, np.random.default_rng(1).uniform(0.02, 0.12, n_ref), WHEEL.width,
+                       1e6, 5e6),
+                None, 1, 0.0, None,
+            ),
         }  # fmt: skip
         tire = sj.DeflectingTire(WHEEL.diameter, WHEEL.width, 0.176, 100e3)
         rigid_rows = {

@@ -164,17 +164,26 @@ class Rut(AbstractTerrain):
     def rim_properties(self, sinkage, width):
         z = jnp.asarray(sinkage)
         d = self.reloading_depth
-        p_u = self.virgin.pressure(self.rut_sinkage, width)
-        p_u = jnp.where(jnp.isfinite(p_u), p_u, 0.0)  # infinite only on the base, d = 0
         # The virgin law at most 4 ulp above its base (a rut pressed to the base has its
         # floor there, where a law such as Wong's is infinite).
         eps = jnp.finfo(jnp.result_type(z, float)).eps
         virgin_z = jnp.minimum(z + self.rut_sinkage - d, self.virgin.depth * (1 - 4 * eps))
         sigma, cohesion, tan_phi, modulus = self.virgin.rim_properties(virgin_z, width)
         reloading = z < d
-        safe_d = jnp.where(d > 0, d, 1.0)
-        sigma = jnp.where(reloading, p_u * jnp.where(reloading, z, 0.0) / safe_d, sigma)
+        sigma = jnp.where(reloading, self._reloading(jnp.where(reloading, z, 0.0), width), sigma)
         return sigma, cohesion, tan_phi, modulus
+
+    def _reloading(self, sinkage, width) -> Array:
+        """The reloading line's sigma' = p_u z' / d [Pa] at the sinkage z' [m] below the
+        floor (0 for a rut of no reloading depth)."""
+        d = self.reloading_depth
+        return self._loaded_pressure(width) * sinkage / jnp.where(d > 0, d, 1.0)
+
+    def _loaded_pressure(self, width) -> Array:
+        """p_u [Pa]: the virgin law's pressure at the rut's depth z_u (0 where it is
+        infinite: a rut pressed to the base, whose reloading depth is 0)."""
+        p_u = self.virgin.pressure(self.rut_sinkage, width)
+        return jnp.where(jnp.isfinite(p_u), p_u, 0.0)
 
     @property
     def depth(self) -> Array:
@@ -188,7 +197,7 @@ class Rut(AbstractTerrain):
         sinkage = self.depth - clearance
         reloading = sinkage < self.reloading_depth
         virgin = self.virgin.pressure_at_clearance(clearance, width)
-        line = self.pressure(jnp.where(reloading, sinkage, 0.0), width)
+        line = self._reloading(jnp.where(reloading, sinkage, 0.0), width)
         return jnp.where(reloading, line, virgin)
 
     def closed_form_rim(self) -> bool:

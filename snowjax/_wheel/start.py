@@ -37,16 +37,28 @@ def _theta_from_s(s, theta_cap):
 
 
 def _newton_s(residual, s, steps):
-    """A few plain Newton steps on an elementwise residual of s (for the initial guess)."""
+    """A few plain Newton steps on an elementwise residual of s (for the initial guess):
+    (s, the residual's derivative at the last iterate before its step, 0 where it was
+    not negative)."""
 
-    def step(_, s):
+    def step(_, carry):
+        s, _ = carry
         f, df = jax.jvp(residual, (s,), (jnp.ones_like(s),))
-        delta = jnp.where(df < 0, f / jnp.where(df < 0, df, -1.0), 0.0)
+        falling = df < 0
+        delta = jnp.where(falling, f / jnp.where(falling, df, -1.0), 0.0)
         # Damped: at s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a
         # full step can overshoot to where W underflows (float32).
-        return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
+        s = jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
+        return s, jnp.where(falling, df, 0.0)
 
-    return jax.lax.fori_loop(0, steps, step, s)
+    return jax.lax.fori_loop(0, steps, step, (s, jnp.zeros_like(s)))
+
+
+def _shifted_s(s, slope, shift):
+    """One damped Newton step from a root s of a residual whose derivative there is
+    `slope` (< 0; 0: no step) to the root of the residual plus `shift`."""
+    delta = jnp.where(slope < 0, shift / jnp.where(slope < 0, slope, -1.0), 0.0)
+    return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
 
 
 def _surface_stiffness(terrain, width, like):
