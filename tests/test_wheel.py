@@ -695,3 +695,42 @@ def test_bracketed_newton_reports_its_real_result():
     jump = solve(lambda y: jnp.where(y < 0.4, 1.0, -1.0) * (1 + y))
     assert jump.result == optx.RESULTS.nonlinear_divergence
     np.testing.assert_allclose(jump.value, 0.4, atol=1e-11)
+
+
+def test_the_closed_form_start_lies_within_one_percent_of_the_root():
+    """The closed-form rule's cold start (`front_rim._closed_form_start`: the no-shear
+    closed form solved for the load, then one Newton step of it to load / factor, the
+    factor being the shear's share of W at that guess) lands within 1 % of the root's
+    entry angle on Wong snow and on ruts 2-12 cm deep in it, 1-9 kN, slips 0-0.9
+    (measured: 3.5e-3 at most over 4,000 cases; on these cases, without the correction
+    the start misses by up to 7.8 %, corrected the wrong way by 15 %)."""
+    from snowjax._wheel.contact import _contact_batch
+    from snowjax._wheel.equilibrium import _entry_angle_cap
+    from snowjax._wheel.front_rim import _FRONT_RIM_RULE, _closed_form_start
+    from snowjax._wheel.running import Straight
+    from snowjax._wheel.shear_law import JanosiHanamoto
+    from snowjax._wheel.start import _theta_from_s
+
+    wheel, snow = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
+    rng = np.random.default_rng(7)
+    n = 64
+    load, slip = rng.uniform(1e3, 9e3, n), rng.uniform(0.0, 0.9, n)
+    rut = sj.Rut(snow, rng.uniform(0.02, 0.12, n), wheel.width, 1e6, 5e6)
+    law = JanosiHanamoto()
+    for terrain in (snow, rut):
+        leaves = jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), (wheel, terrain))
+
+        def vertical(theta0, leaves=leaves):
+            return _contact_batch(
+                theta0, jnp.asarray(slip), leaves[0], leaves[1], sj.FrontRegion(), Straight(),
+                (), shear=law, n=10, braking=False, rule=_FRONT_RIM_RULE, vertical_only=True,
+            )  # fmt: skip
+
+        cap = _entry_angle_cap(leaves[1].depth, leaves[0].diameter)[0]
+        start = _closed_form_start(
+            vertical, cap, jnp.asarray(load), jnp.asarray(slip), *leaves, law
+        )[-1]
+        root = sj.solve_wheel(wheel, terrain, load, slip)
+        assert np.all(np.asarray(root.status) == Status.CONVERGED)
+        error = np.asarray(_theta_from_s(start, cap)) / np.asarray(root.entry_angle) - 1
+        assert np.max(np.abs(error)) < 1e-2, np.max(np.abs(error))
