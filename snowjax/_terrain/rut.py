@@ -170,13 +170,12 @@ class Rut(AbstractTerrain):
         virgin_z = jnp.minimum(z + self.rut_sinkage - d, self.virgin.depth * (1 - 4 * eps))
         sigma, cohesion, tan_phi, modulus = self.virgin.rim_properties(virgin_z, width)
         reloading = z < d
-        sigma = jnp.where(reloading, self._reloading(jnp.where(reloading, z, 0.0), width), sigma)
+        sigma = jnp.where(reloading, self._reloading(jnp.where(reloading, z, 0.0), d, width), sigma)
         return sigma, cohesion, tan_phi, modulus
 
-    def _reloading(self, sinkage, width) -> Array:
+    def _reloading(self, sinkage, d, width) -> Array:
         """The reloading line's sigma' = p_u z' / d [Pa] at the sinkage z' [m] below the
-        floor (0 for a rut of no reloading depth)."""
-        d = self.reloading_depth
+        floor, d [m] the `reloading_depth` (0 for a rut of no reloading depth)."""
         return self._loaded_pressure(width) * sinkage / jnp.where(d > 0, d, 1.0)
 
     def _loaded_pressure(self, width) -> Array:
@@ -194,10 +193,10 @@ class Rut(AbstractTerrain):
         """sigma' [Pa] at `clearance` [m] above the base: the virgin law's own
         (`AbstractTerrain.pressure_at_clearance`, free of cancellation near a base where
         it diverges) beyond the reloading branch, the reloading line within it."""
-        sinkage = self.depth - clearance
-        reloading = sinkage < self.reloading_depth
+        sinkage, d = self.depth - clearance, self.reloading_depth
+        reloading = sinkage < d
         virgin = self.virgin.pressure_at_clearance(clearance, width)
-        line = self._reloading(jnp.where(reloading, sinkage, 0.0), width)
+        line = self._reloading(jnp.where(reloading, sinkage, 0.0), d, width)
         return jnp.where(reloading, line, virgin)
 
     def closed_form_rim(self) -> bool:

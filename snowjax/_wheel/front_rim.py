@@ -68,9 +68,9 @@ from .running import _STRAIGHT
 from .start import (
     S_MAX,
     _balance_residual,
+    _damped_step,
     _newton_s,
     _s_min,
-    _shifted_s,
     _surface_stiffness,
     _theta_from_s,
     _warm_start,
@@ -492,9 +492,9 @@ def _closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
         w_ns = _no_shear_load(theta_g, diameter, width, snow)
         factor = jnp.clip(vertical(theta_g) / jnp.maximum(w_ns, 1e-30 * target), 0.5, 2.0)
         factor = jax.lax.stop_gradient(factor)
-        # The no-shear balance for load / factor: its residual is the one solved plus
-        # ln(factor), so one Newton step with the last slope.
-        s0 = jax.lax.stop_gradient(_shifted_s(s0, slope, jnp.log(factor)))
+        # The no-shear balance for load / factor: its residual is the one solved (0 at
+        # s0) plus ln(factor), so one Newton step with the last slope.
+        s0 = jax.lax.stop_gradient(_damped_step(s0, jnp.log(factor), slope))
     return over, target, lower, upper, s0
 
 

@@ -38,26 +38,23 @@ def _theta_from_s(s, theta_cap):
 
 def _newton_s(residual, s, steps):
     """A few plain Newton steps on an elementwise residual of s (for the initial guess):
-    (s, the residual's derivative at the last iterate before its step, 0 where it was
-    not negative)."""
+    (s, the residual's derivative at the last iterate before its step)."""
 
     def step(_, carry):
         s, _ = carry
         f, df = jax.jvp(residual, (s,), (jnp.ones_like(s),))
-        falling = df < 0
-        delta = jnp.where(falling, f / jnp.where(falling, df, -1.0), 0.0)
-        # Damped: at s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a
-        # full step can overshoot to where W underflows (float32).
-        s = jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
-        return s, jnp.where(falling, df, 0.0)
+        return _damped_step(s, f, df), df
 
     return jax.lax.fori_loop(0, steps, step, (s, jnp.zeros_like(s)))
 
 
-def _shifted_s(s, slope, shift):
-    """One damped Newton step from a root s of a residual whose derivative there is
-    `slope` (< 0; 0: no step) to the root of the residual plus `shift`."""
-    delta = jnp.where(slope < 0, shift / jnp.where(slope < 0, slope, -1.0), 0.0)
+def _damped_step(s, f, df):
+    """s after the Newton step for a residual f with derivative df (no step where df >= 0:
+    the residual falls with s), damped to |step| <= 0.5 and kept in [s_min, S_MAX]: at
+    s ~ s_min the derivative is ~ s (theta0 = theta_cap exp(-s^2)), so a full step can
+    overshoot to where W underflows (float32)."""
+    falling = df < 0
+    delta = jnp.where(falling, f / jnp.where(falling, df, -1.0), 0.0)
     return jnp.clip(s - jnp.clip(delta, -0.5, 0.5), _s_min(s.dtype), S_MAX)
 
 
