@@ -430,9 +430,13 @@ def _initial_guess(theta_cap, load, diameter, width, terrain, stiffness):
     balance's derivative d ln(W_no_shear) / ds there (`_newton_s`).
 
     Starting from the small-angle law W ~ r b (r k) theta0^3 / 3, k = `stiffness`
-    (`_surface_stiffness`), three Newton steps on `ln(W_no_shear(theta0) / F_z)`
+    (`_surface_stiffness`), two Newton steps on `ln(W_no_shear(theta0) / F_z)`
     (`_no_shear_load`) refine the guess; the shear stress adds to W for a driven wheel,
-    so the true theta0 is a little lower.
+    so the true theta0 is a little lower.  (A third step, which this start once took,
+    left the start's error after the shear correction at the same worst case: on the
+    thesis tyre, 1-9 kN, slips -0.5 to 0.9, 600 random cases each of Wong snow, ruts
+    0-15 cm and slip angles 0-0.3 rad, within 4.2e-3 of the root either way, median
+    1.3e-3 against 1e-3, and the solver's Newton steps unchanged.)
     """
     r = diameter / 2
     theta = jnp.cbrt(3 * load / (r * width * r * stiffness))
@@ -443,7 +447,7 @@ def _initial_guess(theta_cap, load, diameter, width, terrain, stiffness):
         w = _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, terrain)
         return _balance_residual(w, load)
 
-    return jax.lax.stop_gradient(_newton_s(residual, jnp.clip(s, s_min, S_MAX), 3))
+    return jax.lax.stop_gradient(_newton_s(residual, jnp.clip(s, s_min, S_MAX), 2))
 
 
 def _closed_form_bracket(vertical, theta_cap, load, slip, wheel, snow):
@@ -480,7 +484,8 @@ def _closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
     Newton iterations of it): on the thesis tyre, 1-9 kN, slips 0-0.9, 4,000 random
     cases, the start's entry angle is within 3.5e-3 of the root (median 1e-3; the
     re-solve: 5.2e-3, 1.7e-3) and the solver's Newton steps are unchanged (2); on ruts
-    2-12 cm deep, 2.6e-3 (2.3e-3).  `benchmarks/compare.py`, two rounds: batches of
+    2-12 cm deep, 2.6e-3 (2.3e-3) (measured with the no-shear solve's third Newton step,
+    since dropped: `_initial_guess`).  `benchmarks/compare.py`, two rounds: batches of
     1,000-100,000 on Wong snow 0.92-0.93x the time, at a slip angle of 0.1 rad 0.83x,
     in a rut 0.80x."""
     diameter, width = wheel.diameter, wheel.width

@@ -388,7 +388,8 @@ class AnyTerrainRule(AbstractGeneralRule):
     def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
         del shear
         deepest = functools.partial(_deepest_stress_angle, distribution, slip)
-        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest)
+        bends = type(wheel).start_angles(wheel, terrain)
+        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends)
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         del slip, wheel, terrain

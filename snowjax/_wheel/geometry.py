@@ -51,6 +51,9 @@ class AbstractWheel(eqx.Module):
       `WheelState.sinkage` [m] (default the rim's, eq. 4.15);
     - `deepest_reach(terrain)`: how deep the undeflected circle may sink on the terrain
       [m] (default: to its base);
+    - `start_angles(terrain)`: entry angles [rad] where the wheel's W(theta0) bends
+      sharply, at which the any-terrain solver's start evaluates W too (default none; a
+      deflecting tyre's switch to its elastic mode);
     - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
       metadata by default);
     - `reference()` (class method): a valid wheel of the kind, which stands in for
@@ -89,6 +92,12 @@ class AbstractWheel(eqx.Module):
         """The deepest the undeflected circle's lowest point may sink [m] on `terrain`
         (the solver's cap on the entry angle): its base (`depth`) for a rim."""
         return terrain.depth
+
+    def start_angles(self, terrain) -> tuple[Array, ...]:
+        """Entry angles [rad] where W(theta0) bends sharply (the any-terrain start
+        evaluates W there too, `start._scan_start`): none for a rim."""
+        del terrain
+        return ()
 
     def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range)."""
