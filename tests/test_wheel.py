@@ -775,7 +775,9 @@ def test_the_any_terrain_start_lies_close_to_the_root():
         w, t, d = leaves
         cap = _entry_angle_cap(type(w).deepest_reach(w, t), w.diameter)[0]
         loads = jnp.asarray(load / divisor)
-        start = _ANY_TERRAIN_RULE.start(vertical, cap, loads, jnp.asarray(slip), w, t, d, law)
+        start = _ANY_TERRAIN_RULE.start(
+            vertical, cap, loads, jnp.asarray(slip), w, t, d, law, False
+        )
         model = sj.ContactModel(terrain, distribution=distribution)
         root = sj.solve_wheel(wheel, model, load / divisor, slip)
         converged = np.asarray(root.status) == Status.CONVERGED

@@ -171,7 +171,9 @@ def _solve_layout(
         )
 
     if guess is None:
-        start = rule.start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear)
+        start = rule.start(
+            vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
+        )
     else:
         start = rule.warm_start(vertical, theta_cap, load, slip, guess, wheel, terrain)
     over, target, lower, upper, s0 = start

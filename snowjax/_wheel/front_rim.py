@@ -546,8 +546,10 @@ class FrontRimRule(AbstractContactRule):
     def prepare_slip(self, slip):
         return _flush_tiny_slip(slip)
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
-        del distribution  # the front region
+    def start(
+        self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
+    ):  # fmt: skip
+        del distribution, braking  # the front region; the closed form serves either layout
         return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):

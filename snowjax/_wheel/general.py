@@ -382,14 +382,19 @@ class AbstractGeneralRule(AbstractContactRule):
 
 class AnyTerrainRule(AbstractGeneralRule):
     """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`, started
-    from W at two entry angles, and at the breakpoints of a law whose pressure can fall
-    (`start._scan_start`)."""
+    from W at two entry angles, at the wheel's `start_angles` (a tyre's switch to its
+    elastic mode) and at the breakpoints of a law whose pressure can fall, then two
+    secant steps (`start._scan_start`)."""
 
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+    def start(
+        self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
+    ):  # fmt: skip
         del shear
         deepest = functools.partial(_deepest_stress_angle, distribution, slip)
         bends = type(wheel).start_angles(wheel, terrain)
-        return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends)
+        return _scan_start(
+            vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends, not braking
+        )
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         del slip, wheel, terrain

@@ -31,8 +31,9 @@ class AbstractContactRule(eqx.Module):
       simulator accuracy the law's `nodes_simulator` on every panel (`simulator_nodes`),
       or, given `nodes_per_panel`, that many on every panel (`uniform_nodes`).
     - `prepare_slip(slip)`: the slips as the rule's layout needs them.
-    - `start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear)`:
-      (over, target, lower, upper, s0) of the solver (`start.py`); `warm_start(vertical,
+    - `start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear,
+      braking)`: (over, target, lower, upper, s0) of the solver (`start.py`; `braking`:
+      whether the layout has braked elements); `warm_start(vertical,
       theta_cap, load, slip, guess, wheel, terrain)` the same from a previous entry
       angle `guess`.
     - `contact(contact, slip, terrain, distribution, law, n, running, braking,
@@ -69,7 +70,9 @@ class AbstractContactRule(eqx.Module):
         return slip
 
     @abc.abstractmethod
-    def start(self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear):
+    def start(
+        self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
+    ):  # fmt: skip
         raise NotImplementedError
 
     @abc.abstractmethod

@@ -1,6 +1,7 @@
 """Where the solver starts: its variable s (theta0 = theta_cap exp(-s^2)), the bracket
 [s_min, S_MAX], a warm start from a previous entry angle, and the any-terrain start, W
-at two entry angles and, on a law that can fall, at its breakpoints (`_scan_start`);
+at two entry angles, at a deflecting tyre's switch to its elastic mode and, on a law
+that can fall, at its breakpoints, then two secant steps (`_scan_start`);
 `front_rim.py` has the closed-form start of a terrain that offers closed forms of its
 rim integrals.  See `equilibrium.py` for the solver itself.
 """
@@ -90,7 +91,7 @@ def _warm_bracket_start(vertical, theta_cap, load, guess):
 S_MID = float(np.sqrt(8.0))
 
 
-def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=()):
+def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(), secant=True):
     """(over, target, lower, upper, s0) from W at a few entry angles (any terrain).
 
     A law whose pressure rises with depth (`AbstractTerrain.pressure_rises`): W is
@@ -99,9 +100,14 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=())
     bends (`bends`: a deflecting tyre's switch to its elastic mode,
     `AbstractWheel.start_angles`) brackets the root between two of them, or in [S_MID,
     S_MAX]; ln W linear in s^2 between the two (exact for a power law; extrapolated
-    beyond S_MID) gives s0, which `_secant_steps` refine.  A third fixed point at s^2 =
-    16, which this start once also evaluated, changed no result beyond 1e-11 relative
-    and cost 4-9 % of the any-terrain solves.
+    beyond S_MID) gives s0, which `_secant_steps` refine where `secant` (the driving
+    layout: no slip < 0).  A braked wheel's W is no power law of theta0 (its backward
+    shear pulls W below 0 at small entry angles, where the line through the two points
+    then starts 35-80 % off the root on Bekker's snow), and two secant steps do not
+    bring such a start close enough to save a Newton step: in the braking layout they
+    are not taken (batches of slips -0.3 to 0.9 took as many Newton steps with them).
+    A third fixed point at s^2 = 16, which this start once also evaluated, changed no
+    result beyond 1e-11 relative and cost 4-9 % of the any-terrain solves.
 
     A law whose pressure can fall at a breakpoint (`LayeredSnow`, where the ice breaks):
     the solver wants the shallowest equilibrium, and W is no longer monotone.  W rises
@@ -133,6 +139,8 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=())
     upper = jnp.where(beyond, S_MAX, upper)
     s0 = jnp.where(beyond, jnp.sqrt(x_beyond), s0)
     bracket = (lower, f_lower, upper, f_upper, ~beyond)
+    if not secant:
+        return over, target, lower, upper, s0
     smooth = terrain.pressure_rises()
     return over, target, *_secant_steps(vertical, theta_cap, target, bracket, s0, smooth)
 
@@ -163,30 +171,35 @@ def _secant_steps(vertical, theta_cap, target, bracket, s0, smooth):
     by (median, max): Bekker 1e-5, 2e-5 (two points alone: 5e-2, 0.15); Reece 3e-8,
     7e-8 (3e-2, 4e-2); Wong–Reece on Wong snow 7e-8, 9e-6 (8e-3, 4e-2); the tyre at
     100 kPa on Wong snow, with its mode switch among the points, 3e-4, 4e-3 (0.29,
-    0.34 without either).
+    0.34 without either).  The steps run in a `fori_loop`: written out one after the
+    other, a step's W evaluation cost XLA:CPU 2.5x a W alone (Wong–Reece on Wong snow,
+    braking layout, batch 1,000: 10 us against 4 us per element), in the loop 1x.
     """
     lower, f_lower, upper, f_upper, known = bracket
-    x_last, f_last = lower**2, f_lower
-    last_deep = jnp.zeros_like(f_lower, bool)
-    for step in range(SECANT_STEPS):
+
+    def step(i, carry):
+        lower, f_lower, upper, f_upper, known, s0, x_last, f_last, last_deep = carry
         f0 = _log_ratio(vertical(_theta_from_s(s0, theta_cap)), target)
         x0 = s0**2
         deep = f0 >= 0  # W carries the target: the root lies at a larger s (shallower)
         other = jnp.where(deep, known, True)
         x_p = jnp.where(other, jnp.where(deep, upper, lower) ** 2, x_last)
         f_p = jnp.where(other, jnp.where(deep, f_upper, f_lower), f_last)
-        if step and smooth:  # the secant through the last two points
-            x_p, f_p = x_last, f_last
-        elif step:  # the same end kept twice: Illinois's halving
-            f_p = jnp.where(other & (deep == last_deep), 0.5 * f_p, f_p)
-        last_deep = deep
+        later = i > 0
+        if smooth:  # after the first step: the secant through the last two points
+            x_p, f_p = jnp.where(later, x_last, x_p), jnp.where(later, f_last, f_p)
+        else:  # the same end kept twice: Illinois's halving
+            f_p = jnp.where(later & other & (deep == last_deep), 0.5 * f_p, f_p)
         lower, f_lower = jnp.where(deep, s0, lower), jnp.where(deep, f0, f_lower)
         upper, f_upper = jnp.where(deep, upper, s0), jnp.where(deep, f_upper, f0)
         known = known | ~deep
         apart = f0 != f_p
         x_new = x0 - f0 * (x0 - x_p) / jnp.where(apart, f0 - f_p, 1.0)
         s0 = jnp.sqrt(jnp.clip(jnp.where(apart, x_new, x0), lower**2, upper**2))
-        x_last, f_last = x0, f0
+        return lower, f_lower, upper, f_upper, known, s0, x0, f0, deep
+
+    carry = (lower, f_lower, upper, f_upper, known, s0, lower**2, f_lower, jnp.zeros_like(known))
+    lower, _, upper, _, _, s0, *_ = jax.lax.fori_loop(0, SECANT_STEPS, step, carry)
     return jax.lax.stop_gradient((lower, upper, s0))
 
 
