@@ -391,7 +391,9 @@ class AnyTerrainRule(AbstractGeneralRule):
     ):  # fmt: skip
         del shear
         deepest = functools.partial(_deepest_stress_angle, distribution, slip)
-        bends = type(wheel).start_angles(wheel, terrain)
+        # The wheel's bends and the secant steps serve the driving layout: a braked
+        # wheel's start is far off either way (`_scan_start`).
+        bends = () if braking else type(wheel).start_angles(wheel, terrain)
         return _scan_start(
             vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends, not braking
         )

@@ -105,7 +105,10 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(),
     shear pulls W below 0 at small entry angles, where the line through the two points
     then starts 35-80 % off the root on Bekker's snow), and two secant steps do not
     bring such a start close enough to save a Newton step: in the braking layout they
-    are not taken (batches of slips -0.3 to 0.9 took as many Newton steps with them).
+    are not taken (batches of slips -0.3 to 0.9 took as many Newton steps with them),
+    nor are a wheel's `bends` evaluated (a 100 kPa tyre on Bekker's snow with
+    Wong–Reece, batch 1,000 of those slips: as many Newton steps, 1.13x the time with
+    the bend).
     A third fixed point at s^2 = 16, which this start once also evaluated, changed no
     result beyond 1e-11 relative and cost 4-9 % of the any-terrain solves.
 
@@ -117,7 +120,11 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(),
     breakpoint's angle (its local maxima) brackets the shallowest crossing of the load
     between the shallowest grid point that carries it and the next (`_grid_start`).  A
     scan of 48 fixed angles, which this start replaced, cost about 80 % of such a solve
-    and could miss a peak between its points (then returning a deeper root).
+    and could miss a peak between its points (then returning a deeper root).  No secant
+    steps follow on such a law: where W jumps, two steps of regula falsi (with the
+    Illinois rule: secants through the last two points crossed the jump) left a few
+    starts of a batch 10-25 % off, which then took as many Newton steps as before
+    (layered snow, 1-9 kN / 4, slips 0-0.9, batch 20,000: 1.08x the time).
     """
     s_lo = _s_min(load.dtype)
     grid = [jnp.full_like(load, s) for s in (s_lo, S_MID)]
@@ -139,10 +146,9 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(),
     upper = jnp.where(beyond, S_MAX, upper)
     s0 = jnp.where(beyond, jnp.sqrt(x_beyond), s0)
     bracket = (lower, f_lower, upper, f_upper, ~beyond)
-    if not secant:
+    if not (secant and terrain.pressure_rises()):
         return over, target, lower, upper, s0
-    smooth = terrain.pressure_rises()
-    return over, target, *_secant_steps(vertical, theta_cap, target, bracket, s0, smooth)
+    return over, target, *_secant_steps(vertical, theta_cap, target, bracket, s0)
 
 
 # Secant steps of `_secant_steps`: on the thesis tyre, 1-9 kN, slips 0-0.9, the any-terrain
@@ -151,23 +157,20 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(),
 SECANT_STEPS = 2
 
 
-def _secant_steps(vertical, theta_cap, target, bracket, s0, smooth):
+def _secant_steps(vertical, theta_cap, target, bracket, s0):
     """(lower, upper, s0) after `SECANT_STEPS` steps on f = ln(W / target) in s^2 from s0,
     in `bracket` = (lower, f(lower) >= 0, upper, f(upper) < 0, whether f(upper) is
     known: not where the bracket reaches S_MAX).
 
     Each step evaluates W alone at s0 (a Newton step also takes its tangent, about as
     costly again) and moves the bracket's end on s0's side there, so the bracket still
-    holds a sign change of f (on a law that can fall, the shallowest: `_grid_start`).
-    The first step takes the secant through s0 and the bracket's other end (regula
-    falsi; where f there is not known, the last point evaluated: an extrapolation).
-    The next, where W is smooth (`smooth`: a law that rises), take the secant through
-    the last two points (superlinear); on a law that can fall, whose W jumps where the
-    ice breaks, regula falsi again, halving f at an end kept twice (the Illinois
-    rule), which does not stall at the jump.  Every s0 is kept in the bracket.
+    holds a sign change of f.  The first step takes the secant through s0 and the
+    bracket's other end (regula falsi; where f there is not known, the last point
+    evaluated: an extrapolation), the next the secant through the last two points
+    (superlinear where W is smooth).  Every s0 is kept in the bracket.
 
-    Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand and the
-    layered snow / 4), slips 0-0.9, 64 cases each, the start's entry angle off the root
+    Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand / 4), slips
+    0-0.9, 64 cases each, the start's entry angle off the root
     by (median, max): Bekker 1e-5, 2e-5 (two points alone: 5e-2, 0.15); Reece 3e-8,
     7e-8 (3e-2, 4e-2); Wong–Reece on Wong snow 7e-8, 9e-6 (8e-3, 4e-2); the tyre at
     100 kPa on Wong snow, with its mode switch among the points, 3e-4, 4e-3 (0.29,
@@ -178,27 +181,24 @@ def _secant_steps(vertical, theta_cap, target, bracket, s0, smooth):
     lower, f_lower, upper, f_upper, known = bracket
 
     def step(i, carry):
-        lower, f_lower, upper, f_upper, known, s0, x_last, f_last, last_deep = carry
+        lower, f_lower, upper, f_upper, known, s0, x_last, f_last = carry
         f0 = _log_ratio(vertical(_theta_from_s(s0, theta_cap)), target)
         x0 = s0**2
         deep = f0 >= 0  # W carries the target: the root lies at a larger s (shallower)
         other = jnp.where(deep, known, True)
         x_p = jnp.where(other, jnp.where(deep, upper, lower) ** 2, x_last)
         f_p = jnp.where(other, jnp.where(deep, f_upper, f_lower), f_last)
-        later = i > 0
-        if smooth:  # after the first step: the secant through the last two points
-            x_p, f_p = jnp.where(later, x_last, x_p), jnp.where(later, f_last, f_p)
-        else:  # the same end kept twice: Illinois's halving
-            f_p = jnp.where(later & other & (deep == last_deep), 0.5 * f_p, f_p)
+        # After the first step: the secant through the last two points.
+        x_p, f_p = jnp.where(i > 0, x_last, x_p), jnp.where(i > 0, f_last, f_p)
         lower, f_lower = jnp.where(deep, s0, lower), jnp.where(deep, f0, f_lower)
         upper, f_upper = jnp.where(deep, upper, s0), jnp.where(deep, f_upper, f0)
         known = known | ~deep
         apart = f0 != f_p
         x_new = x0 - f0 * (x0 - x_p) / jnp.where(apart, f0 - f_p, 1.0)
         s0 = jnp.sqrt(jnp.clip(jnp.where(apart, x_new, x0), lower**2, upper**2))
-        return lower, f_lower, upper, f_upper, known, s0, x0, f0, deep
+        return lower, f_lower, upper, f_upper, known, s0, x0, f0
 
-    carry = (lower, f_lower, upper, f_upper, known, s0, lower**2, f_lower, jnp.zeros_like(known))
+    carry = (lower, f_lower, upper, f_upper, known, s0, lower**2, f_lower)
     lower, _, upper, _, _, s0, *_ = jax.lax.fori_loop(0, SECANT_STEPS, step, carry)
     return jax.lax.stop_gradient((lower, upper, s0))
 
