@@ -153,7 +153,7 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(),
 
 # Secant steps of `_secant_steps`: on the thesis tyre, 1-9 kN, slips 0-0.9, the any-terrain
 # solves then take 2 Newton steps (Bekker's snow and Reece's sand, front region and
-# Wong–Reece) instead of 3-4, and the deflecting tyre on Wong snow 2-3 instead of 5-7.
+# Wong–Reece) instead of 3-4, and the deflecting tyre on Wong snow 3 instead of 5-7.
 SECANT_STEPS = 2
 
 

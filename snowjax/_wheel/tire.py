@@ -344,8 +344,9 @@ class DeflectingTire(AbstractWheel):
         W(theta0) bends there, from the rim's steep rise (on Wong snow, towards the
         base's singularity) to the flat's slow one: the any-terrain start, which
         interpolates ln W between the entry angles it evaluates, evaluates it there too
-        (on Wong snow, 100 kPa, 1-9 kN, slips 0-0.9: the start within 4 % of the root
-        instead of 29 %, 2-3 Newton steps instead of 5-7)."""
+        (on Wong snow, 100 kPa, 1-9 kN, slips 0-0.9, 64 cases, with the secant steps
+        that follow: the start within 4e-3 of the root instead of 0.34, 3 Newton steps
+        instead of 5-7)."""
         capacity = self.inflation_pressure + self.carcass_pressure
         reach = jnp.minimum(self.deepest_reach(terrain), self.diameter)
         s = type(terrain).sinkage_at_pressure(terrain, capacity, self.width, reach)
