@@ -743,7 +743,7 @@ def test_the_any_terrain_start_lies_close_to_the_root():
     (Wong–Reece), and within 2 % for a 100 kPa tyre on Wong snow, whose W bends sharply
     at the switch; 1-9 kN (/ 9, / 4 on the soils), slips 0-0.9.  Measured on these
     cases: 2e-5, 7e-8 and 4e-3; the two points alone missed by up to 15 %, 4 % and,
-    for the tyre, 34 %, which took 5-7 Newton steps instead of 2-3."""
+    for the tyre, 34 %, which took 5-7 Newton steps instead of 3."""
     from snowjax._wheel.contact import _contact_batch
     from snowjax._wheel.equilibrium import _entry_angle_cap
     from snowjax._wheel.front_rim import _ANY_TERRAIN_RULE
