@@ -179,27 +179,27 @@ def _secant_steps(vertical, theta_cap, target, bracket, s0):
     braking layout, batch 1,000: 10 us against 4 us per element), in the loop 1x.
     """
     lower, f_lower, upper, f_upper, known = bracket
+    # The first step's partner: the bracket's other end where f there is known, else
+    # the last point evaluated (the bracket's lower end: an extrapolation).
+    first_x = (jnp.where(known, upper, lower) ** 2, lower**2)
+    first_f = (jnp.where(known, f_upper, f_lower), f_lower)
 
     def step(i, carry):
-        lower, f_lower, upper, f_upper, known, s0, x_last, f_last = carry
+        lower, upper, s0, x_last, f_last = carry
         f0 = _log_ratio(vertical(_theta_from_s(s0, theta_cap)), target)
         x0 = s0**2
         deep = f0 >= 0  # W carries the target: the root lies at a larger s (shallower)
-        other = jnp.where(deep, known, True)
-        x_p = jnp.where(other, jnp.where(deep, upper, lower) ** 2, x_last)
-        f_p = jnp.where(other, jnp.where(deep, f_upper, f_lower), f_last)
-        # After the first step: the secant through the last two points.
-        x_p, f_p = jnp.where(i > 0, x_last, x_p), jnp.where(i > 0, f_last, f_p)
-        lower, f_lower = jnp.where(deep, s0, lower), jnp.where(deep, f0, f_lower)
-        upper, f_upper = jnp.where(deep, upper, s0), jnp.where(deep, f_upper, f0)
-        known = known | ~deep
+        # Later steps: the secant through the last two points.
+        x_p = jnp.where(i > 0, x_last, jnp.where(deep, *first_x))
+        f_p = jnp.where(i > 0, f_last, jnp.where(deep, *first_f))
+        lower, upper = jnp.where(deep, s0, lower), jnp.where(deep, upper, s0)
         apart = f0 != f_p
         x_new = x0 - f0 * (x0 - x_p) / jnp.where(apart, f0 - f_p, 1.0)
         s0 = jnp.sqrt(jnp.clip(jnp.where(apart, x_new, x0), lower**2, upper**2))
-        return lower, f_lower, upper, f_upper, known, s0, x0, f0
+        return lower, upper, s0, x0, f0
 
-    carry = (lower, f_lower, upper, f_upper, known, s0, lower**2, f_lower)
-    lower, _, upper, _, _, s0, *_ = jax.lax.fori_loop(0, SECANT_STEPS, step, carry)
+    carry = (lower, upper, s0, lower**2, f_lower)
+    lower, upper, s0, *_ = jax.lax.fori_loop(0, SECANT_STEPS, step, carry)
     return jax.lax.stop_gradient((lower, upper, s0))
 
 
