@@ -1,14 +1,18 @@
-"""The batched root finder of `solve_wheel`: both of its paths find the same roots."""
+"""The batched root finders of `solve_wheel`: both of their paths find the same roots,
+and the secant finds the Newton iteration's."""
 
 import jax
 import jax.numpy as jnp
 import numpy as np
+import pytest
 
 from snowjax._wheel.bracketed import (
     FIRST_PHASE_STEPS,
     STRAGGLERS,
     BracketedNewton,
+    BracketedSecant,
     _BracketState,
+    _SecantState,
     solve_elementwise,
 )
 
@@ -32,6 +36,16 @@ def _solve(params):
     lower, upper = jnp.zeros(n), jnp.full(n, 10.0)
     start = jnp.full(n, 5.0)
     return solve_elementwise(_residual, start, lower, upper, params, TOL, 64)
+
+
+@jax.jit
+def _solve_secant(params):
+    n = params[0].shape[0]
+    lower, upper = jnp.zeros(n), jnp.full(n, 10.0)
+    # The secant's first step takes this slope of f in y^2 (f' = -1 - b c cos(c y) at
+    # y = 5: the guess -1 / (2 y) ignores the sine).
+    secant = dict(slope=jnp.full(n, -0.1))
+    return solve_elementwise(_residual, jnp.full(n, 5.0), lower, upper, params, TOL, 64, secant)
 
 
 def test_a_large_batch_and_its_single_group_slices_agree():
@@ -90,3 +104,61 @@ def test_the_predicted_stop_needs_two_newton_steps_in_the_quadratic_regime():
     assert np.asarray(state.converged).tolist() == [True, False, False, False, True]
     assert not np.any(np.asarray(state.collapsed))
     np.testing.assert_array_equal(np.asarray(new_y), [1e-5, 1e-5, 1e-5, 2e-3, 0.0])
+
+
+def test_the_secant_finds_roots_and_its_paths_agree():
+    """`BracketedSecant` (f alone at each step) on the same non-monotone residuals: every
+    element within the tolerance of a root, Newton's where the root is unique (b c <=
+    1: f falls monotonically; measured: to 1e-15), and its straggler groups end where
+    one-group solves of the same elements end."""
+    n = 3 * STRAGGLERS + 8
+    params = _params(n)
+    secant = np.asarray(_solve_secant(params))
+    newton = np.asarray(_solve(params))
+    assert np.all(np.abs(np.asarray(_residual(jnp.asarray(secant), params))) <= TOL)
+    unique = params[1] * params[2] <= 1
+    assert unique.sum() > 20
+    np.testing.assert_allclose(secant[unique], newton[unique], rtol=1e-12, atol=1e-12)
+    sliced = np.concatenate(
+        [
+            np.asarray(_solve_secant(tuple(p[k : k + STRAGGLERS] for p in params)))
+            for k in range(0, n, STRAGGLERS)
+        ]
+    )
+    np.testing.assert_allclose(sliced, secant, rtol=1e-12, atol=1e-12)
+
+
+def test_a_secant_step_stays_in_its_bracket_and_predicts_from_its_contraction():
+    """A secant step through the last point that would leave the bracket takes regula
+    falsi where f is known at both ends, bisection where not; an element converges
+    when the last contraction |f_k / f_(k-1)|, repeated, predicts a residual below 0.1
+    atol after two interpolation steps (`bracketed._secant_finished`), and stays
+    converged."""
+    solver = BracketedSecant(rtol=1e-9, atol=1e-9)
+    n = 4
+    y = jnp.full(n, 0.5)
+    inf = jnp.full(n, jnp.inf)
+    no = jnp.zeros(n, bool)
+    previous = _SecantState(
+        lower=jnp.zeros(n), upper=jnp.ones(n),
+        f_lower=jnp.array([jnp.inf, 1.0, 1.0, 1.0]),
+        f_upper=jnp.array([-jnp.inf, -1.0, -1.0, -1.0]),
+        x_last=jnp.full(n, 0.24), f_last=jnp.array([0.91, 0.91, 1e-2, 1e-2]),
+        slope=jnp.full(n, -1.0), f=jnp.array([0.91, 0.91, 1e-2, 1e-2]), diff=inf,
+        interpolated=jnp.array([False, False, True, True]), converged=no.at[3].set(True),
+        collapsed=no,
+    )  # fmt: skip
+    # f at y = 0.5 (x = 0.25): 0, 1 far from the root, where the secant through the last
+    # point (slope -1 in x) runs out of [0, 1]; 2, 3 close to it.
+    f_now = jnp.array([0.9, 0.9, 5e-7, 5e-7])
+    new_y, state, _ = solver.step(lambda z, _: (f_now + 0 * z, None), y, None, {}, previous, None)
+    new_y = np.asarray(new_y)
+    # 0: bisection of [0.5, 1] (f at its upper end unknown); 1: regula falsi in y^2
+    # between f(0.5) = 0.9 and f(1) = -1.
+    assert new_y[0] == pytest.approx(0.75, rel=1e-12)
+    assert new_y[1] == pytest.approx(np.sqrt(0.25 + 0.9 / 1.9 * 0.75), rel=1e-12)
+    # 2: the secant step; 5e-7 (5e-7 / 1e-2) = 2.5e-11 <= 1e-10 after two interpolation
+    # steps: converged.  3: converged before, stays where it was.
+    assert new_y[2] == pytest.approx(np.sqrt(0.25 + 5e-7 * 0.01 / (1e-2 - 5e-7)), rel=1e-12)
+    assert np.asarray(state.converged).tolist() == [False, False, True, True]
+    assert new_y[3] == 0.5

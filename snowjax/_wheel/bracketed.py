@@ -1,4 +1,4 @@
-"""Newton's method inside a per-element bracket: the batched load-balance root finder.
+"""Root finders inside a per-element bracket: the batched load-balance solvers.
 
 `solve_wheel` solves one scalar equation per batch element (elements are independent,
 the Jacobian is diagonal).  `optx.Newton` alone does not do this job: its convergence
@@ -6,9 +6,17 @@ test is batch-wide, and it has no bracket, so a single element whose W(theta0) i
 monotone (a braked wheel, whose backward shear stress pulls it down; a layered snow)
 keeps the whole batch iterating to `max_steps`, after which a vmapped `optx.Bisection`
 costs about 35 more evaluations of the batch.  That made braking batches ~30x slower
-than driving ones.  This solver is the classic safeguarded Newton ("rtsafe", Press et
-al., Numerical Recipes, 3rd ed., section 9.4) written as an optimistix root finder, so
-`optx.root_find` and its implicit-function-theorem gradients are unchanged.
+than driving ones.  Two solvers do the job, both optimistix root finders kept inside a
+bracket and tested elementwise:
+
+- `BracketedNewton`, the classic safeguarded Newton ("rtsafe", Press et al., Numerical
+  Recipes, 3rd ed., section 9.4): a warm start (the last simulation step's root) lies
+  so close that two Newton steps end the solve;
+- `BracketedSecant`, the secant method in the solver variable's square (Dekker's
+  safeguard: a step that leaves the bracket takes regula falsi or bisection instead):
+  no tangent, so each step costs one evaluation of the residual instead of two (a
+  tangent through a quadrature costs 1.6-3x the values on CPU), for the cold starts,
+  which come from a cheap estimate (`start.py`).
 """
 
 from __future__ import annotations
@@ -140,6 +148,131 @@ def _finished(previous: _BracketState, state: _BracketState, y, atol, rtol) -> t
     return converged, collapsed
 
 
+class _SecantState(eqx.Module):
+    lower: Float[Array, " n"]
+    upper: Float[Array, " n"]
+    # f at the bracket's ends: +inf / -inf where not evaluated (only the sign is known).
+    f_lower: Float[Array, " n"]
+    f_upper: Float[Array, " n"]
+    # The last evaluated point, x = y^2 and f there (f NaN before the first step).
+    x_last: Float[Array, " n"]
+    f_last: Float[Array, " n"]
+    # df/dx where no point has been evaluated yet (the start's estimate).
+    slope: Float[Array, " n"]
+    f: Float[Array, " n"]
+    diff: Float[Array, " n"]
+    # Whether the last step interpolated (its residuals can predict the next one).
+    interpolated: Bool[Array, " n"]
+    converged: Bool[Array, " n"]
+    collapsed: Bool[Array, " n"]
+
+
+class BracketedSecant(optx.AbstractRootFinder):
+    """Elementwise secant steps on independent scalar equations f_k(y_k) = 0, kept in a
+    bracket; each step evaluates f alone (no tangent).
+
+    The steps interpolate f linearly in x = y^2 (the solver variable of `solve_wheel` is
+    s with theta0 = theta_cap exp(-s^2): ln W is nearly linear in s^2 where W is nearly
+    a power of theta0): the first from the slope df/dx given in `options["slope"]`,
+    the next through the last two points.  A step that would leave the bracket (or
+    that has the wrong slope) takes regula falsi between the bracket's ends where f is
+    known at both, else bisection.  `options`: `lower`, `upper` (arrays shaped like y)
+    bracketing a sign change, f(lower) > 0 > f(upper); optionally `f_lower`, `f_upper`
+    (the values there, where evaluated; +inf / -inf otherwise) and `x_last`, `f_last`
+    (a point already evaluated, e.g. by a start; f NaN where none).  Termination as
+    `BracketedNewton`'s, the prediction from the secant's superlinear convergence: after
+    two interpolation steps in a row with |f| <= `QUADRATIC_REGIME`, the next residual
+    |f_k|^2 / |f_(k-1)| (the last contraction repeated: the secant's only improves)
+    below `PREDICTION_MARGIN` atol.
+    """
+
+    rtol: float
+    atol: float
+    norm: ClassVar[Callable] = optx.max_norm
+
+    def init(self, fn, y, args, options, f_struct, aux_struct, tags) -> _SecantState:
+        del fn, args, aux_struct, tags
+        dtype = f_struct.dtype
+
+        def option(name, fill):
+            return jnp.broadcast_to(jnp.asarray(options.get(name, fill), dtype), y.shape)
+
+        lower, upper = option("lower", 0.0), option("upper", 0.0)
+        inf = jnp.full(y.shape, jnp.inf, dtype)
+        no = jnp.zeros(y.shape, bool)
+        collapsed = upper - lower <= self.atol + self.rtol * jnp.abs(y)
+        return _SecantState(
+            lower, upper, option("f_lower", jnp.inf), option("f_upper", -jnp.inf),
+            option("x_last", 0.0), option("f_last", jnp.nan), option("slope", -1.0),
+            inf, inf, no, no, collapsed,
+        )  # fmt: skip
+
+    def step(self, fn, y, args, options, state: _SecantState, tags):
+        del options, tags
+        f, aux = fn(y, args)
+        positive = f > 0  # the sign change lies above y
+        lower = jnp.where(positive, y, state.lower)
+        upper = jnp.where(positive, state.upper, y)
+        f_lower = jnp.where(positive, f, state.f_lower)
+        f_upper = jnp.where(positive, state.f_upper, f)
+        x = y * y
+        known = jnp.isfinite(state.f_last) & (x != state.x_last)
+        chord = (f - state.f_last) / jnp.where(known, x - state.x_last, 1.0)
+        slope = jnp.where(known, chord, state.slope)
+        falling = slope < 0
+        x_new = x - f / jnp.where(falling, slope, -1.0)
+        lo2, hi2 = lower * lower, upper * upper
+        inside = falling & (x_new > lo2) & (x_new < hi2)
+        # Regula falsi where f is known at both ends of the bracket, else bisection.
+        ends_known = jnp.isfinite(f_lower) & jnp.isfinite(f_upper)
+        span = jnp.where(ends_known, f_lower - f_upper, 1.0)
+        falsi = jnp.sqrt(lo2 + (f_lower / span) * (hi2 - lo2))
+        fallback = jnp.where(ends_known, falsi, lower + 0.5 * (upper - lower))
+        done = jnp.abs(f) <= self.atol
+        candidate = jnp.where(inside, jnp.sqrt(jnp.where(inside, x_new, 1.0)), fallback)
+        # An element within the tolerance only takes a step that stays in the bracket.
+        candidate = jnp.where(done & ~inside, y, candidate)
+        stay = state.converged | state.collapsed
+        new_y = jnp.where(stay, y, candidate)
+        new = _SecantState(
+            lower, upper, f_lower, f_upper, x, f, state.slope, f, y - new_y, inside,
+            state.converged, state.collapsed,
+        )  # fmt: skip
+        flags = _secant_finished(state, new, new_y, self.atol, self.rtol)
+        return new_y, dataclasses.replace(new, converged=flags[0], collapsed=flags[1]), aux
+
+    def terminate(self, fn, y, args, options, state: _SecantState, tags):
+        """As `BracketedNewton.terminate`."""
+        del fn, args, options, tags
+        finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
+        failed = finished & ~jnp.all(state.converged)
+        result = optx.RESULTS.where(
+            failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful
+        )
+        return finished, result
+
+    def postprocess(self, fn, y, aux, args, options, state, tags, result):
+        del fn, args, options, state, tags, result
+        stats: dict[str, Any] = {}
+        return y, aux, stats
+
+
+def _secant_finished(previous, state, y, atol, rtol) -> tuple[Array, Array]:
+    """`_finished` for `BracketedSecant`: (converged, collapsed), latched.  Converged:
+    |f| <= atol and the step below atol + rtol |y|; or, after two interpolation steps
+    in a row with |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last
+    contraction, |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
+    scale = atol + rtol * jnp.abs(y)
+    f = jnp.abs(state.f)
+    confirmed = (f <= atol) & (jnp.abs(state.diff) <= scale)
+    ratio = f / jnp.where(previous.interpolated, jnp.abs(previous.f), jnp.inf)
+    regime = state.interpolated & previous.interpolated & (f <= QUADRATIC_REGIME)
+    predicted = regime & (f * ratio <= PREDICTION_MARGIN * atol)
+    converged = previous.converged | confirmed | predicted
+    collapsed = previous.collapsed | (state.upper - state.lower <= scale)
+    return converged, collapsed
+
+
 # Newton steps every element of a batch takes together; elements still unconverged then
 # (a braked wheel whose W(theta0) is not monotone, a poor initial guess) continue alone.
 FIRST_PHASE_STEPS = 5
@@ -148,53 +281,61 @@ FIRST_PHASE_STEPS = 5
 STRAGGLERS = 64
 
 
-def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
-    """Roots of `residual(y, params)` (elementwise over 1-D y) by `BracketedNewton`.
+def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant=None):
+    """Roots of `residual(y, params)` (elementwise over 1-D y) by `BracketedNewton`, or
+    by `BracketedSecant` where `secant` is given.
 
     A batched iteration runs until its slowest element converges, so one straggler
-    would make every element of the batch pay for its extra Newton steps.  All elements
+    would make every element of the batch pay for its extra steps.  All elements
     take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered
     in groups of `STRAGGLERS`, solved on their own from where they stopped, and scattered
     back.  A batch of at most `STRAGGLERS` elements is one such group from the start: one
     solve of `max_steps` (one compiled loop instead of two; its elements that finish
-    early take Newton steps inside their bracket until the last one finishes, which only
-    refines them, by less than the tolerance).  Forward-mode derivatives w.r.t. `params`
-    come from each `optx.root_find`'s implicit adjoint; reverse mode does not pass the
-    groups' `lax.while_loop` (`solve_wheel` passes stopped parameters and differentiates
-    at the root instead).
+    early stay where they finished while the last one iterates).  Forward-mode
+    derivatives w.r.t. `params` come from each `optx.root_find`'s implicit adjoint;
+    reverse mode does not pass the groups' `lax.while_loop` (`solve_wheel` passes
+    stopped parameters and differentiates at the root instead).
 
     **Arguments:** `residual(y, params) -> f` elementwise, `y0`, `lower`, `upper` (1-D,
     bracketing a sign change, `f(lower) > 0 > f(upper)`), `params` (a pytree of arrays with
-    the batch on axis 0), `tol` (absolute, on f and on the step), `max_steps` (total).
+    the batch on axis 0), `tol` (absolute, on f and on the step), `max_steps` (total),
+    `secant` (None: Newton; else a dict of `BracketedSecant`'s other options, arrays
+    shaped like y0: `slope` and any of `f_lower`, `f_upper`, `x_last`, `f_last`).
     **Returns:** y, shape of y0.
     """
-    solver = BracketedNewton(rtol=tol, atol=tol)
+    solver = BracketedSecant(rtol=tol, atol=tol) if secant else BracketedNewton(rtol=tol, atol=tol)
     tags = frozenset({lx.diagonal_tag})
 
-    def solve(y_start, lo, hi, p, steps):
-        lo, hi = jax.lax.stop_gradient((lo, hi))
+    def solve(y_start, options, p, steps):
         return optx.root_find(
             residual,
             solver,
             y_start,
             args=p,
-            options=dict(lower=lo, upper=hi),
+            options=jax.lax.stop_gradient(options),
             max_steps=steps,
             throw=False,
             tags=tags,
         )
 
+    options = dict(lower=lower, upper=upper, **(secant or {}))
     size = y0.shape[0]
     if size <= STRAGGLERS:
         # One group holds the whole batch: one solve, one compiled loop.
-        return solve(y0, lower, upper, params, max_steps).value
-    first = solve(y0, lower, upper, params, min(FIRST_PHASE_STEPS, max_steps))
+        return solve(y0, options, params, max_steps).value
+    first = solve(y0, options, params, min(FIRST_PHASE_STEPS, max_steps))
     rest = max_steps - FIRST_PHASE_STEPS
     if rest <= 0:
         return first.value
     y, state = first.value, first.state
     left = ~(state.converged | state.collapsed)
     m = STRAGGLERS
+    # Where the stragglers continue from: their brackets (and, for the secant, what it
+    # knows of f).
+    names = ("lower", "upper") + (
+        ("f_lower", "f_upper", "x_last", "f_last", "slope") if secant else ()
+    )
+    resume = {name: getattr(state, name) for name in names}
 
     def next_group(carry):
         # Up to m stragglers gathered, solved from where they stopped, scattered back.
@@ -205,8 +346,7 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps):
         pick = lambda x: jnp.take(x, idx, axis=0, mode="clip")  # noqa: E731
         sub = solve(
             jax.lax.stop_gradient(pick(y)),
-            pick(state.lower),
-            pick(state.upper),
+            jax.tree_util.tree_map(pick, resume),
             jax.tree_util.tree_map(pick, params),
             rest,
         )

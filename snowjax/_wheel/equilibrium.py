@@ -1,17 +1,20 @@
 """The sinkage-versus-slip equilibrium of a rigid wheel on shallow snow (eq. 4.14).
 
 `solve_wheel` finds the entry angle theta0 at which the vertical resultant of the rim
-stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (Newton
-kept inside a bracket, `BracketedNewton`): one solver (`_solve_layout`) for every
-terrain, stress distribution, shear law and slip angle, which takes its contact
-integrals and its start from the contact rule (`rules.py`: the any-terrain rule, whose
-start is W at a few entry angles, or the closed-form accelerations of `front_rim.py` where the
-terrain offers them, started from the closed-form no-shear balance).
+stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (kept
+inside a bracket, `bracketed.py`): one solver (`_solve_layout`) for every terrain,
+stress distribution, shear law and slip angle, which takes its contact integrals, its
+start and its steps from the contact rule (`rules.py`: the any-terrain rule, whose cold
+start on a law that rises is a power-law model of the law and whose steps are secant
+steps, `BracketedSecant`; or the closed-form accelerations of `front_rim.py` where the
+terrain offers them, started from the closed-form no-shear balance, and warm starts,
+by Newton steps, `BracketedNewton`).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
 W ~ theta0^3, i.e. `ln W ~ -3 s^2`: in these variables the residual is smooth and
-Newton's method converges in a few steps from either start.  The bound
+Newton's method converges in a few steps from either start (the secant interpolates in
+s^2, where a power law is linear).  The bound
 s >= s_min = 1e-6 keeps every iterate strictly inside the snow layer (theta_cap - theta0
 >= 1e-12 theta_cap), where the residual and its derivative are finite.
 
@@ -102,8 +105,9 @@ class WheelState(eqx.Module):
 
 
 def _tolerance(dtype) -> float:
-    # Newton stops once |ln(W / F_z)| < tol at the iterate before its last step, so the
-    # returned root is balanced far below tol (typically 1e-15 in float64).
+    # The solvers stop once |ln(W / F_z)| < tol at the iterate before their last step (or
+    # the last steps predict it below tol / 10), so the returned root is balanced below
+    # tol (typically 1e-15 in float64 after Newton, 1e-11 after secant steps).
     return 1e-9 if dtype == jnp.float64 else 2e-5
 
 
@@ -137,10 +141,11 @@ def _solve_layout(
 
     Every terrain, distribution, shear law and slip angle: the contact integrals come from
     `_contact_batch`, the start from the contact rule in `options` (`rules.py`).  The
-    batch is one `optx.root_find`
-    (`BracketedNewton`: Newton kept inside a bracket, bisecting where a step would leave
+    batch is one `optx.root_find` (`BracketedNewton`, or `BracketedSecant` where the start
+    gives the secant's options: kept inside a bracket, bisecting where a step would leave
     it) with a diagonal Jacobian (the elements are independent), so a Newton step is one
-    tangent evaluation.  Every element's root lies in [lower, upper]: W > target at the
+    tangent evaluation, a secant step one evaluation of W.  Every element's root lies in
+    [lower, upper]: W > target at the
     deep end, W < target at the shallow one; W need not be monotone in between (a braked
     wheel's backward shear pulls it down; a layered snow's crust breaks).
 
@@ -176,7 +181,7 @@ def _solve_layout(
         )
     else:
         start = rule.warm_start(vertical, theta_cap, load, slip, guess, wheel, terrain)
-    over, target, lower, upper, s0 = start
+    over, target, lower, upper, s0, secant = start
 
     # An element the layer cannot carry is held at the cap (`forces`): its residual is 0,
     # so it leaves the batch's Newton iteration at once (a layer that carries nothing,
@@ -200,6 +205,7 @@ def _solve_layout(
         (theta_cap, target, over, slip, wheel, terrain, distribution, running, terms),
         tol,
         max_steps,
+        secant,
     )
 
     def entry(s, over, th_cap):  # theta0 at s (held at the cap where over it)

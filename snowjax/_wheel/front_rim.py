@@ -550,11 +550,12 @@ class FrontRimRule(AbstractContactRule):
         self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
     ):  # fmt: skip
         del distribution, braking  # the front region; the closed form serves either layout
-        return _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+        start = _closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+        return *start, None
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         bracket = _closed_form_bracket(vertical, theta_cap, load, slip, wheel, terrain)
-        return *bracket, _warm_start(guess, theta_cap)
+        return *bracket, _warm_start(guess, theta_cap), None
 
     def contact(
         self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,

@@ -52,8 +52,8 @@ class AbstractWheel(eqx.Module):
     - `deepest_reach(terrain)`: how deep the undeflected circle may sink on the terrain
       [m] (default: to its base);
     - `start_angles(terrain)`: entry angles [rad] where the wheel's W(theta0) bends
-      sharply, at which the any-terrain solver's start evaluates W too (default none; a
-      deflecting tyre's switch to its elastic mode);
+      sharply, at which the any-terrain solver's start on a law that can fall evaluates W
+      too (default none; a deflecting tyre's switch to its elastic mode);
     - `constraints()`: validity of each parameter (from the fields' `snowjax.parameter`
       metadata by default);
     - `reference()` (class method): a valid wheel of the kind, which stands in for
@@ -94,8 +94,8 @@ class AbstractWheel(eqx.Module):
         return terrain.depth
 
     def start_angles(self, terrain) -> tuple[Array, ...]:
-        """Entry angles [rad] where W(theta0) bends sharply (the any-terrain start
-        evaluates W there too, `start._scan_start`): none for a rim."""
+        """Entry angles [rad] where W(theta0) bends sharply (the any-terrain start on a
+        law that can fall evaluates W there too, `start._scan_start`): none for a rim."""
         del terrain
         return ()
 
@@ -178,6 +178,15 @@ def _sincos_half(theta):
     return x * sin_poly, cos_poly
 
 
+def _sin_cos(theta):
+    """(sin theta, cos theta) for |theta| <= pi [rad] from the half-angle polynomials
+    (`_sincos_half`): exact to rounding, and cheap to repeat where XLA fuses a value of
+    one element into the loop over its quadrature nodes (XLA:CPU's float64 sine there
+    ran once per node: a tyre's W took 2.2x as long)."""
+    half_sin, half_cos = _sincos_half(theta)
+    return 2 * half_sin * half_cos, 1 - 2 * half_sin**2
+
+
 def rim_sinkage(theta: ArrayLike, entry_angle: ArrayLike, diameter: ArrayLike) -> Array:
     """Sinkage of the rim point at angle theta, eq. (4.5): `z = D/2 (cos theta - cos theta0)`.
 
@@ -204,7 +213,8 @@ def _rim_sinkage_between(theta_eff, theta0, diameter):
     d = theta0 - theta_eff in [0, pi] (no cancellation near the entry; the half-angle of d
     by `_sincos_half`, the sine and cosine of theta0 once per wheel)."""
     half_sin, half_cos = _sincos_half(theta0 - theta_eff)
-    return diameter * half_sin * (jnp.sin(theta0) * half_cos - jnp.cos(theta0) * half_sin)
+    sin0, cos0 = _sin_cos(theta0)
+    return diameter * half_sin * (sin0 * half_cos - cos0 * half_sin)
 
 
 def shear_displacement(

@@ -32,10 +32,11 @@ class AbstractContactRule(eqx.Module):
       or, given `nodes_per_panel`, that many on every panel (`uniform_nodes`).
     - `prepare_slip(slip)`: the slips as the rule's layout needs them.
     - `start(vertical, theta_cap, load, slip, wheel, terrain, distribution, shear,
-      braking)`: (over, target, lower, upper, s0) of the solver (`start.py`; `braking`:
-      whether the layout has braked elements); `warm_start(vertical,
-      theta_cap, load, slip, guess, wheel, terrain)` the same from a previous entry
-      angle `guess`.
+      braking)`: (over, target, lower, upper, s0, secant) of the solver (`start.py`;
+      `braking`: whether the layout has braked elements; `secant`: None for Newton
+      steps, or the options of `BracketedSecant`, whose steps then solve);
+      `warm_start(vertical, theta_cap, load, slip, guess, wheel, terrain)` the same
+      from a previous entry angle `guess`.
     - `contact(contact, slip, terrain, distribution, law, n, running, braking,
       vertical_only, terms, bottomed, moving_rule)`: (W, R, T, M, F_y, M_z) of one
       element (scalar inputs; `running` from `running.py`), or W alone with

@@ -1,9 +1,11 @@
 """Where the solver starts: its variable s (theta0 = theta_cap exp(-s^2)), the bracket
-[s_min, S_MAX], a warm start from a previous entry angle, and the any-terrain start, W
-at two entry angles, at a deflecting tyre's switch to its elastic mode and, on a law
-that can fall, at its breakpoints, then two secant steps (`_scan_start`);
-`front_rim.py` has the closed-form start of a terrain that offers closed forms of its
-rim integrals.  See `equilibrium.py` for the solver itself.
+[s_min, S_MAX], a warm start from a previous entry angle, and the any-terrain cold
+starts: on a law whose pressure rises, the entry angle at which a power-law model of the
+law carries the load (`_power_law_start`, for the secant steps of `BracketedSecant`); on
+a law that can fall, W at two entry angles, at a deflecting tyre's switch to its
+elastic mode and at the law's breakpoints (`_scan_start`, for Newton); `front_rim.py`
+has the closed-form start of a terrain that offers closed forms of its rim integrals.
+See `equilibrium.py` for the solver itself.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
+from jax.scipy.special import gammaln
 
 __all__: list[str] = []
 
@@ -87,120 +90,112 @@ def _warm_bracket_start(vertical, theta_cap, load, guess):
     return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
 
 
+def _power_law_root(wheel, terrain, load, theta_cap):
+    """(theta0 [rad], m [-]): the entry angle at which a rigid rim's front region
+    carries `load` [N] without shear if the law were, near the rim's deepest point, a
+    power of the sinkage with its local exponent there, and m = d ln W / d ln theta0 of
+    that model, 2 n + 1.
+
+    The model: under a plate law sigma = k z^n the front region of a rim whose lowest
+    point is z0 deep (contact length sqrt(D z0), the rim a parabola there) carries
+    `W = b sqrt(D z0) sigma(z0) c(n)`, c(n) = int_0^1 (1 - u^2)^n du = sqrt(pi)
+    Gamma(n + 1) / (2 Gamma(n + 3/2)) (Bekker's rigid-wheel sinkage, written with the
+    law's own sigma(z0)).  For any law, n = z0 sigma'(z0) / sigma(z0) at the current z0:
+    six Newton steps on ln W = ln F_z in ln z0 (slope 1/2 + n), from 2 % of D, kept below
+    the cap's sinkage.  Per element, without the contact quadrature: the start of
+    `BracketedSecant` (`_power_law_start`), whose steps correct the model's misfit
+    (shear, a rear region, a tyre's flat, the law's departure from a power)."""
+    d, b = wheel.diameter, wheel.width
+    z_cap = d * jnp.sin(theta_cap / 2) ** 2
+    top = jnp.log(jnp.maximum(z_cap, jnp.finfo(z_cap.dtype).tiny)) + float(np.log1p(-1e-9))
+    tiny = jnp.finfo(load.dtype).tiny
+
+    def exponent(z):
+        sigma, slope = jax.jvp(lambda z: terrain.pressure(z, b), (z,), (jnp.ones_like(z),))
+        ok = jnp.isfinite(sigma) & jnp.isfinite(slope) & (sigma > 0)
+        n = jnp.where(ok, z * slope / jnp.where(ok, sigma, 1.0), 50.0)
+        return jnp.where(ok, sigma, jnp.finfo(load.dtype).max), jnp.clip(n, 0.05, 50.0)
+
+    def newton(_, log_z):
+        z = jnp.exp(log_z)
+        sigma, n = exponent(z)
+        c = float(0.5 * np.sqrt(np.pi)) * jnp.exp(gammaln(n + 1) - gammaln(n + 1.5))
+        w = b * jnp.sqrt(d * z) * sigma * c
+        g = jnp.log(jnp.maximum(w, tiny) / load)
+        return jnp.minimum(log_z - jnp.clip(g / (0.5 + n), -3.0, 3.0), top)
+
+    start = jnp.minimum(jnp.log(0.02 * d), top)
+    z0 = jnp.exp(jax.lax.fori_loop(0, 6, newton, start))
+    n = exponent(z0)[1]
+    theta = 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z0 / d, 0.0, 1.0)))
+    return jax.lax.stop_gradient((theta, 2 * n + 1))
+
+
+def _power_law_start(vertical, theta_cap, load, wheel, terrain):
+    """(over, target, lower, upper, s0, secant) of the any-terrain cold start on a law
+    whose pressure rises (`BracketedSecant` solves from it): s0 at the entry angle of
+    `_power_law_root`, the secant's first slope d ln W / d s^2 = -m from its exponent,
+    and the whole range [s_min, S_MAX] as the bracket.
+
+    The layer's capacity (W at the cap) decides which elements it cannot carry; it is
+    evaluated only where some element's model root lies deeper than half the cap's
+    sinkage (a `lax.cond`: for a batch far from the base, or on a law without one far
+    from the 85 degree limit, it costs nothing), and then serves as f at the bracket's
+    lower end.  Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand
+    / 4), slips -0.3 to 0.9, front region and Wong–Reece: the secant steps reach |ln(W /
+    F_z)| < 1e-10 in 4-7 evaluations of W, where the start this replaced took four
+    (W at two entry angles, two secant steps) and Newton two more with tangents."""
+    s_lo = _s_min(load.dtype)
+    theta, exponent = _power_law_root(wheel, terrain, load, theta_cap)
+    s0 = _s_of_theta(theta, theta_cap)
+    lower = jnp.full_like(load, s_lo)
+    deep = jnp.sin(theta / 2) ** 2 > 0.5 * jnp.sin(theta_cap / 2) ** 2
+    capacity = jax.lax.cond(
+        jnp.any(deep),
+        lambda: vertical(_theta_from_s(lower, theta_cap)),
+        lambda: jnp.full_like(load, jnp.inf),
+    )
+    over = load >= capacity
+    target = jnp.where(over, 0.5 * capacity, load)
+    f_lower = jnp.where(jnp.isfinite(capacity), _log_ratio(capacity, target), jnp.inf)
+    secant = dict(
+        slope=-exponent,
+        f_lower=jax.lax.stop_gradient(f_lower),
+        f_upper=jnp.full_like(load, -jnp.inf),
+    )
+    return over, target, lower, jnp.full_like(load, S_MAX), s0, secant
+
+
 # The second entry angle of the two-point start, s^2 = 8 (theta0 = e^-8 theta_cap).
 S_MID = float(np.sqrt(8.0))
 
 
-def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=(), secant=True):
-    """(over, target, lower, upper, s0) from W at a few entry angles (any terrain).
+def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=()):
+    """(over, target, lower, upper, s0) from W at a few entry angles, on a law whose
+    pressure can fall at a breakpoint (`LayeredSnow`, where the ice breaks;
+    `AbstractTerrain.pressure_rises` False).
 
-    A law whose pressure rises with depth (`AbstractTerrain.pressure_rises`): W is
-    monotone in theta0 except for a braked wheel's backward shear.  W at the cap (s_min;
-    the capacity), at e^-8 of it (s^2 = 8) and at the entry angles where the wheel's W
-    bends (`bends`: a deflecting tyre's switch to its elastic mode,
-    `AbstractWheel.start_angles`) brackets the root between two of them, or in [S_MID,
-    S_MAX]; ln W linear in s^2 between the two (exact for a power law; extrapolated
-    beyond S_MID) gives s0, which `_secant_steps` refine where `secant` (the driving
-    layout: no slip < 0).  A braked wheel's W is no power law of theta0 (its backward
-    shear pulls W below 0 at small entry angles, where the line through the two points
-    then starts 35-80 % off the root on Bekker's snow), and two secant steps do not
-    bring such a start close enough to save a Newton step: in the braking layout they
-    are not taken (batches of slips -0.3 to 0.9 took as many Newton steps with them),
-    nor are a wheel's `bends` evaluated (a 100 kPa tyre on Bekker's snow with
-    Wong–Reece, batch 1,000 of those slips: as many Newton steps, 1.13x the time with
-    the bend).
-    A third fixed point at s^2 = 16, which this start once also evaluated, changed no
-    result beyond 1e-11 relative and cost 4-9 % of the any-terrain solves.
-
-    A law whose pressure can fall at a breakpoint (`LayeredSnow`, where the ice breaks):
-    the solver wants the shallowest equilibrium, and W is no longer monotone.  W rises
+    The solver wants the shallowest equilibrium, and W is no longer monotone.  W rises
     while the contact's deepest sinkage stays above a breakpoint, peaks when it reaches
     one (`_breakpoint_s`; `deepest(theta0)` the stress angle nearest the axle) and may
-    fall just past it, then rises again.  W at the cap, at e^-8 of it and at every
-    breakpoint's angle (its local maxima) brackets the shallowest crossing of the load
-    between the shallowest grid point that carries it and the next (`_grid_start`).  A
-    scan of 48 fixed angles, which this start replaced, cost about 80 % of such a solve
-    and could miss a peak between its points (then returning a deeper root).  No secant
-    steps follow on such a law: where W jumps, two steps of regula falsi (with the
-    Illinois rule: secants through the last two points crossed the jump) left a few
-    starts of a batch 10-25 % off, which then took as many Newton steps as before
+    fall just past it, then rises again.  W at the cap (s_min; the capacity), at e^-8 of
+    it (s^2 = 8), at every breakpoint's angle (its local maxima) and at the entry angles
+    where the wheel's W bends (`bends`: a deflecting tyre's switch to its elastic mode,
+    `AbstractWheel.start_angles`) brackets the shallowest crossing of the load between
+    the shallowest grid point that carries it and the next (`_grid_start`), and ln W
+    linear in s^2 between the two gives s0.  A scan of 48 fixed angles, which this start
+    replaced, cost about 80 % of such a solve and could miss a peak between its points
+    (then returning a deeper root).  Secant steps between the grid points, tried on such
+    a law, crossed the jumps where the ice breaks: regula falsi with the Illinois rule
+    left a few starts of a batch 10-25 % off, which took as many Newton steps as before
     (layered snow, 1-9 kN / 4, slips 0-0.9, batch 20,000: 1.08x the time).
     """
     s_lo = _s_min(load.dtype)
     grid = [jnp.full_like(load, s) for s in (s_lo, S_MID)]
     grid += [_s_of_theta(theta, theta_cap) for theta in bends]
-    if not terrain.pressure_rises():
-        grid += _breakpoint_s(terrain, diameter, theta_cap, deepest)
+    grid += _breakpoint_s(terrain, diameter, theta_cap, deepest)
     s_grid = jax.lax.stop_gradient(jnp.sort(jnp.stack(grid), axis=0))
-    over, target, lower, upper, s0, f_lower, f_upper = _grid_start(
-        vertical, theta_cap, load, s_grid, vmapped=not terrain.pressure_rises()
-    )
-    # A root shallower than every grid point (a load below W at e^-8 of the cap, on a
-    # law that rises; the grid's last two points bracket it otherwise): its bracket is
-    # [S_MID, S_MAX], s0 the extrapolation of ln W linear in s^2 through the two
-    # shallowest points, W at S_MAX unknown.
-    beyond = (f_upper >= 0) & terrain.pressure_rises()
-    slope = jnp.where(f_lower > f_upper, (f_lower - f_upper) / (upper**2 - lower**2), 1.0)
-    x_beyond = jnp.clip(upper**2 + f_upper / slope, upper**2, S_MAX**2)
-    lower, f_lower = jnp.where(beyond, upper, lower), jnp.where(beyond, f_upper, f_lower)
-    upper = jnp.where(beyond, S_MAX, upper)
-    s0 = jnp.where(beyond, jnp.sqrt(x_beyond), s0)
-    bracket = (lower, f_lower, upper, f_upper, ~beyond)
-    if not (secant and terrain.pressure_rises()):
-        return over, target, lower, upper, s0
-    return over, target, *_secant_steps(vertical, theta_cap, target, bracket, s0)
-
-
-# Secant steps of `_secant_steps`: on the thesis tyre, 1-9 kN, slips 0-0.9, the any-terrain
-# solves then take 2 Newton steps (Bekker's snow and Reece's sand, front region and
-# Wong–Reece) instead of 3-4, and the deflecting tyre on Wong snow 3 instead of 5-7.
-SECANT_STEPS = 2
-
-
-def _secant_steps(vertical, theta_cap, target, bracket, s0):
-    """(lower, upper, s0) after `SECANT_STEPS` steps on f = ln(W / target) in s^2 from s0,
-    in `bracket` = (lower, f(lower) >= 0, upper, f(upper) < 0, whether f(upper) is
-    known: not where the bracket reaches S_MAX).
-
-    Each step evaluates W alone at s0 (a Newton step also takes its tangent, about as
-    costly again) and moves the bracket's end on s0's side there, so the bracket still
-    holds a sign change of f.  The first step takes the secant through s0 and the
-    bracket's other end (regula falsi; where f there is not known, the last point
-    evaluated: an extrapolation), the next the secant through the last two points
-    (superlinear where W is smooth).  Every s0 is kept in the bracket.
-
-    Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand / 4), slips
-    0-0.9, 64 cases each, the start's entry angle off the root
-    by (median, max): Bekker 1e-5, 2e-5 (two points alone: 5e-2, 0.15); Reece 3e-8,
-    7e-8 (3e-2, 4e-2); Wong–Reece on Wong snow 7e-8, 9e-6 (8e-3, 4e-2); the tyre at
-    100 kPa on Wong snow, with its mode switch among the points, 3e-4, 4e-3 (0.29,
-    0.34 without either).  The steps run in a `fori_loop`: written out one after the
-    other, a step's W evaluation cost XLA:CPU 2.5x a W alone (Wong–Reece on Wong snow,
-    braking layout, batch 1,000: 10 us against 4 us per element), in the loop 1x.
-    """
-    lower, f_lower, upper, f_upper, known = bracket
-    # The first step's partner: the bracket's other end where f there is known, else
-    # the last point evaluated (the bracket's lower end: an extrapolation).
-    first_x = (jnp.where(known, upper, lower) ** 2, lower**2)
-    first_f = (jnp.where(known, f_upper, f_lower), f_lower)
-
-    def step(i, carry):
-        lower, upper, s0, x_last, f_last = carry
-        f0 = _log_ratio(vertical(_theta_from_s(s0, theta_cap)), target)
-        x0 = s0**2
-        deep = f0 >= 0  # W carries the target: the root lies at a larger s (shallower)
-        # Later steps: the secant through the last two points.
-        x_p = jnp.where(i > 0, x_last, jnp.where(deep, *first_x))
-        f_p = jnp.where(i > 0, f_last, jnp.where(deep, *first_f))
-        lower, upper = jnp.where(deep, s0, lower), jnp.where(deep, upper, s0)
-        apart = f0 != f_p
-        x_new = x0 - f0 * (x0 - x_p) / jnp.where(apart, f0 - f_p, 1.0)
-        s0 = jnp.sqrt(jnp.clip(jnp.where(apart, x_new, x0), lower**2, upper**2))
-        return lower, upper, s0, x0, f0
-
-    carry = (lower, upper, s0, lower**2, f_lower)
-    lower, upper, s0, *_ = jax.lax.fori_loop(0, SECANT_STEPS, step, carry)
-    return jax.lax.stop_gradient((lower, upper, s0))
+    return _grid_start(vertical, theta_cap, load, s_grid)[:5]
 
 
 def _s_of_theta(theta, theta_cap):
@@ -256,19 +251,13 @@ def _log_ratio(w, target):
     return jnp.log(jnp.maximum(w, jnp.finfo(w.dtype).tiny) / target)
 
 
-def _grid_start(vertical, theta_cap, load, s_grid, vmapped=True):
+def _grid_start(vertical, theta_cap, load, s_grid):
     """`_scan_start` on the grid `s_grid` of each element (shape (points, batch),
     increasing s along axis 0, deep to shallow): (over, target, lower, upper, s0,
-    f(lower), f(upper)), f = ln(W / target).  W at the points by one `vmap` of
-    `vertical`, or (`vmapped` False) one call per point: on a law that rises, whose grid
-    has 2-3 points, the calls cost less (a rim at a slip angle of 0.1 rad on Wong snow
-    with Wong–Reece, slips -0.3 to 0.9, batch 1,000: the vmap 1.2x the time of the
-    solve in `benchmarks/compare.py`, three runs)."""
+    f(lower), f(upper)), f = ln(W / target), W at the points by one `vmap` of
+    `vertical`."""
     points = s_grid.shape[0]
-    if vmapped:
-        w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(s_grid)
-    else:
-        w_grid = jnp.stack([vertical(_theta_from_s(s, theta_cap)) for s in s_grid])
+    w_grid = jax.vmap(lambda s: vertical(_theta_from_s(s, theta_cap)))(s_grid)
     over = ~jnp.any(w_grid >= load, axis=0)
     target = jnp.where(over, 0.5 * w_grid[0], load)
     carried = w_grid >= target

@@ -105,6 +105,7 @@ from .geometry import (
     _shear_displacement,
     _shear_displacement_slope,
     _shear_sign_change,
+    _sin_cos,
     _sincos_half,
     max_sinkage,
 )
@@ -341,12 +342,10 @@ class DeflectingTire(AbstractWheel):
         """The entry angle [rad] of the switch to the elastic mode: where the rim's
         lowest-point pressure sigma(s) reaches p_i + p_c, s = D sin^2(theta0 / 2) =
         `sinkage_at_pressure(p_i + p_c)` (within the circle's reach, `deepest_reach`).
-        W(theta0) bends there, from the rim's steep rise (on Wong snow, towards the
-        base's singularity) to the flat's slow one: the any-terrain start, which
-        interpolates ln W between the entry angles it evaluates, evaluates it there too
-        (on Wong snow, 100 kPa, 1-9 kN, slips 0-0.9, 64 cases, with the secant steps
-        that follow: the start within 4e-3 of the root instead of 0.34, 3 Newton steps
-        instead of 5-7)."""
+        W(theta0) bends there, from the rim's steep rise to the flat's slow one: the
+        any-terrain start on a law that can fall (`start._scan_start`), which
+        interpolates ln W between the entry angles it evaluates, evaluates it there too,
+        so that its interpolation does not span the bend."""
         capacity = self.inflation_pressure + self.carcass_pressure
         reach = jnp.minimum(self.deepest_reach(terrain), self.diameter)
         s = type(terrain).sinkage_at_pressure(terrain, capacity, self.width, reach)
@@ -397,7 +396,7 @@ class TreadContact(AbstractContact):
         half = self.tread.half_angle
         u = jnp.clip(theta, -half, half)
         # sin(u) from the nodes' own sines (an XLA sine per node costs ~7 exps on CPU).
-        sin_half = jnp.sin(half)
+        sin_half = _sin_cos(half)[0]
         sin_u = jnp.where(theta >= half, sin_half, jnp.where(theta <= -half, -sin_half, sin))
         shortening = (half - u) - (sin_half - sin_u)
         flat = jnp.abs(theta) < half
