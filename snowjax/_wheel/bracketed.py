@@ -161,7 +161,8 @@ class _SecantState(eqx.Module):
     slope: Float[Array, " n"]
     f: Float[Array, " n"]
     diff: Float[Array, " n"]
-    # Whether the last step interpolated (its residuals can predict the next one).
+    # Whether the last step was a secant step through two evaluated points (its
+    # residuals can predict the next one).
     interpolated: Bool[Array, " n"]
     converged: Bool[Array, " n"]
     collapsed: Bool[Array, " n"]
@@ -181,9 +182,11 @@ class BracketedSecant(optx.AbstractRootFinder):
     (the values there, where evaluated; +inf / -inf otherwise) and `x_last`, `f_last`
     (a point already evaluated, e.g. by a start; f NaN where none).  Termination as
     `BracketedNewton`'s, the prediction from the secant's superlinear convergence: after
-    two interpolation steps in a row with |f| <= `QUADRATIC_REGIME`, the next residual
-    |f_k|^2 / |f_(k-1)| (the last contraction repeated: the secant's only improves)
-    below `PREDICTION_MARGIN` atol.
+    two secant steps in a row (each through two evaluated points: not the first step,
+    whose slope is the start's estimate and whose contraction says nothing of the
+    next) with |f| <= `QUADRATIC_REGIME`, the next residual |f_k|^2 / |f_(k-1)| (the
+    last contraction repeated: the secant's only improves, e_(k+1) / e_k = C e_(k-1)
+    < C e_(k-2) = e_k / e_(k-1)) below `PREDICTION_MARGIN` atol.
     """
 
     rtol: float
@@ -234,8 +237,11 @@ class BracketedSecant(optx.AbstractRootFinder):
         candidate = jnp.where(done & ~inside, y, candidate)
         stay = state.converged | state.collapsed
         new_y = jnp.where(stay, y, candidate)
+        # A step through two evaluated points (not the start's slope, not regula falsi
+        # or bisection): the contractions of two of them in a row predict the next.
+        secant = inside & known
         new = _SecantState(
-            lower, upper, f_lower, f_upper, x, f, state.slope, f, y - new_y, inside,
+            lower, upper, f_lower, f_upper, x, f, state.slope, f, y - new_y, secant,
             state.converged, state.collapsed,
         )  # fmt: skip
         flags = _secant_finished(state, new, new_y, self.atol, self.rtol)
@@ -259,9 +265,9 @@ class BracketedSecant(optx.AbstractRootFinder):
 
 def _secant_finished(previous, state, y, atol, rtol) -> tuple[Array, Array]:
     """`_finished` for `BracketedSecant`: (converged, collapsed), latched.  Converged:
-    |f| <= atol and the step below atol + rtol |y|; or, after two interpolation steps
-    in a row with |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last
-    contraction, |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
+    |f| <= atol and the step below atol + rtol |y|; or, after two secant steps in a row
+    with |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last contraction,
+    |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
     scale = atol + rtol * jnp.abs(y)
     f = jnp.abs(state.f)
     confirmed = (f <= atol) & (jnp.abs(state.diff) <= scale)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import jax
 import jax.numpy as jnp
 import numpy as np
-from jax.scipy.special import gammaln
 
 __all__: list[str] = []
 
@@ -91,18 +90,20 @@ def _warm_bracket_start(vertical, theta_cap, load, guess):
 
 
 def _power_law_root(wheel, terrain, load, theta_cap):
-    """(theta0 [rad], m [-]): the entry angle at which a rigid rim's front region
-    carries `load` [N] without shear if the law were, near the rim's deepest point, a
-    power of the sinkage with its local exponent there, and m = d ln W / d ln theta0 of
-    that model, 2 n + 1.
+    """(theta0 [rad], m [-], W at the cap [N]): the entry angle at which a rigid rim's
+    front region carries `load` [N] without shear if the law were, near the rim's
+    deepest point, a power of the sinkage with its local exponent there; m = d ln W / d
+    ln theta0 of that model, 2 n + 1; and the model's W with the rim at the cap.
 
     The model: under a plate law sigma = k z^n the front region of a rim whose lowest
     point is z0 deep (contact length sqrt(D z0), the rim a parabola there) carries
     `W = b sqrt(D z0) sigma(z0) c(n)`, c(n) = int_0^1 (1 - u^2)^n du = sqrt(pi)
     Gamma(n + 1) / (2 Gamma(n + 3/2)) (Bekker's rigid-wheel sinkage, written with the
-    law's own sigma(z0)).  For any law, n = z0 sigma'(z0) / sigma(z0) at the current z0:
-    six Newton steps on ln W = ln F_z in ln z0 (slope 1/2 + n), from 2 % of D, kept below
-    the cap's sinkage.  Per element, without the contact quadrature: the start of
+    law's own sigma(z0)), here `sqrt(pi / (4 n + pi))` (within 0.6 % for every n >= 0,
+    exact at n = 0 and as n -> infinity; a gamma function per step cost as much as the
+    rest of the start).  For any law, n = z0 sigma'(z0) / sigma(z0) at the current z0:
+    five Newton steps on ln W = ln F_z in ln z0 (slope 1/2 + n), from 2 % of D, kept
+    below the cap's sinkage.  Per element, without the contact quadrature: the start of
     `BracketedSecant` (`_power_law_start`), whose steps correct the model's misfit
     (shear, a rear region, a tyre's flat, the law's departure from a power)."""
     d, b = wheel.diameter, wheel.width
@@ -110,25 +111,23 @@ def _power_law_root(wheel, terrain, load, theta_cap):
     top = jnp.log(jnp.maximum(z_cap, jnp.finfo(z_cap.dtype).tiny)) + float(np.log1p(-1e-9))
     tiny = jnp.finfo(load.dtype).tiny
 
-    def exponent(z):
+    def model(z):  # (W [N], n [-]) of the model at the lowest point's sinkage z [m]
         sigma, slope = jax.jvp(lambda z: terrain.pressure(z, b), (z,), (jnp.ones_like(z),))
         ok = jnp.isfinite(sigma) & jnp.isfinite(slope) & (sigma > 0)
-        n = jnp.where(ok, z * slope / jnp.where(ok, sigma, 1.0), 50.0)
-        return jnp.where(ok, sigma, jnp.finfo(load.dtype).max), jnp.clip(n, 0.05, 50.0)
+        n = jnp.clip(jnp.where(ok, z * slope / jnp.where(ok, sigma, 1.0), 50.0), 0.05, 50.0)
+        sigma = jnp.where(ok, sigma, jnp.finfo(load.dtype).max)
+        return b * jnp.sqrt(d * z) * sigma * jnp.sqrt(np.pi / (4 * n + np.pi)), n
 
     def newton(_, log_z):
-        z = jnp.exp(log_z)
-        sigma, n = exponent(z)
-        c = float(0.5 * np.sqrt(np.pi)) * jnp.exp(gammaln(n + 1) - gammaln(n + 1.5))
-        w = b * jnp.sqrt(d * z) * sigma * c
+        w, n = model(jnp.exp(log_z))
         g = jnp.log(jnp.maximum(w, tiny) / load)
         return jnp.minimum(log_z - jnp.clip(g / (0.5 + n), -3.0, 3.0), top)
 
     start = jnp.minimum(jnp.log(0.02 * d), top)
-    z0 = jnp.exp(jax.lax.fori_loop(0, 6, newton, start))
-    n = exponent(z0)[1]
+    z0 = jnp.exp(jax.lax.fori_loop(0, 5, newton, start))
+    n = model(z0)[1]
     theta = 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z0 / d, 0.0, 1.0)))
-    return jax.lax.stop_gradient((theta, 2 * n + 1))
+    return jax.lax.stop_gradient((theta, 2 * n + 1, model(jnp.exp(top))[0]))
 
 
 def _power_law_start(vertical, theta_cap, load, wheel, terrain):
@@ -138,20 +137,25 @@ def _power_law_start(vertical, theta_cap, load, wheel, terrain):
     and the whole range [s_min, S_MAX] as the bracket.
 
     The layer's capacity (W at the cap) decides which elements it cannot carry; it is
-    evaluated only where some element's model root lies deeper than half the cap's
-    sinkage (a `lax.cond`: for a batch far from the base, or on a law without one far
-    from the 85 degree limit, it costs nothing), and then serves as f at the bracket's
-    lower end.  Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand
-    / 4), slips -0.3 to 0.9, front region and Wong–Reece: the secant steps reach |ln(W /
-    F_z)| < 1e-10 in 4-7 evaluations of W, where the start this replaced took four
-    (W at two entry angles, two secant steps) and Newton two more with tangents."""
+    evaluated (a `lax.cond`, once for the batch) only where some element may be beyond
+    it: on a law with a base, where the model's root lies deeper than half the cap's
+    sinkage; on one without, where the model carries less than three times the load at
+    the cap (85 degrees: the model errs by tens of % there, and a braked wheel's
+    backward shear takes from W).  It then also serves as f at the bracket's lower end.
+    Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand / 4), slips
+    -0.3 to 0.9, front region and Wong–Reece: the secant steps reach |ln(W / F_z)| <
+    1e-10 in 4-7 evaluations of W, where the start this replaced took four (W at two
+    entry angles, two secant steps) and Newton two more with tangents."""
     s_lo = _s_min(load.dtype)
-    theta, exponent = _power_law_root(wheel, terrain, load, theta_cap)
+    theta, exponent, model_capacity = _power_law_root(wheel, terrain, load, theta_cap)
     s0 = _s_of_theta(theta, theta_cap)
     lower = jnp.full_like(load, s_lo)
-    deep = jnp.sin(theta / 2) ** 2 > 0.5 * jnp.sin(theta_cap / 2) ** 2
+    if terrain.has_base():
+        maybe_over = jnp.sin(theta / 2) ** 2 > 0.5 * jnp.sin(theta_cap / 2) ** 2
+    else:
+        maybe_over = model_capacity < 3 * load
     capacity = jax.lax.cond(
-        jnp.any(deep),
+        jnp.any(maybe_over),
         lambda: vertical(_theta_from_s(lower, theta_cap)),
         lambda: jnp.full_like(load, jnp.inf),
     )
