@@ -231,6 +231,11 @@ class BracketedSecant(optx.AbstractRootFinder):
         span = jnp.where(ends_known, f_lower - f_upper, 1.0)
         falsi = jnp.sqrt(lo2 + (f_lower / span) * (hi2 - lo2))
         fallback = jnp.where(ends_known, falsi, lower + 0.5 * (upper - lower))
+        # A step past a deep end where f is not known yet tries that end (an element
+        # the layer cannot carry then collapses onto it at once instead of bisecting
+        # its way there).
+        beyond = falling & (x_new <= lo2) & ~jnp.isfinite(f_lower)
+        fallback = jnp.where(beyond, lower, fallback)
         done = jnp.abs(f) <= self.atol
         candidate = jnp.where(inside, jnp.sqrt(jnp.where(inside, x_new, 1.0)), fallback)
         # An element within the tolerance only takes a step that stays in the bracket.

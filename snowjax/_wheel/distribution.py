@@ -11,6 +11,7 @@ of the mirrored front angle.
 """
 
 import abc
+from typing import ClassVar
 
 import equinox as eqx
 import jax.numpy as jnp
@@ -38,6 +39,9 @@ class AbstractStressDistribution(eqx.Module):
     """
 
     __check_init__ = _check_real_leaves
+
+    #: Whether the rear region mirrors the front linearly (`rear_region`).
+    mirrors_rear: ClassVar[bool] = False
 
     @abc.abstractmethod
     def stress_angle(
@@ -73,6 +77,16 @@ class AbstractStressDistribution(eqx.Module):
     def constraints(self, slip) -> list[tuple[str, Array, Array, str]]:
         """Validity per element: (name, value, ok mask, allowed range); none by default."""
         return []
+
+    def rear_region(
+        self, entry_angle: Float[ArrayLike, "..."], slip: Float[ArrayLike, "..."]
+    ) -> tuple[Array, Array]:
+        """(theta_m, theta_r) [rad] of a distribution whose rear region [theta_r, theta_m]
+        carries at theta the stress of the front angle theta0 - (theta - theta_r)
+        (theta0 - theta_m) / (theta_m - theta_r) (`mirrors_rear`): the contact
+        integrals then place their nodes once in [theta_m, theta0] for both regions.
+        Only called where `mirrors_rear` is True."""
+        raise NotImplementedError
 
     @classmethod
     def reference(cls) -> "AbstractStressDistribution":
@@ -145,9 +159,16 @@ class WongReece(AbstractStressDistribution):
         """(theta_m / theta0, theta_r / theta0) = (c1 + c2 i, c3) at driving slip i [-]."""
         return self.c1 + self.c2 * slip, self.c3 + 0.0 * slip
 
+    mirrors_rear: ClassVar[bool] = True
+
     def exit_angle(self, entry_angle, slip):
         """theta_r = c3 theta0 [rad]."""
         return self.c3 * entry_angle
+
+    def rear_region(self, entry_angle, slip):
+        """(theta_m, theta_r) = ((c1 + c2 i) theta0, c3 theta0) [rad]: the rear region
+        carries the front's stresses mirrored linearly (`stress_angle`)."""
+        return (self.c1 + self.c2 * slip) * entry_angle, self.c3 * entry_angle
 
     def breakpoints(self, entry_angle, slip):
         """(theta_m,) = ((c1 + c2 i) theta0,) [rad], the peak of the normal stress."""

@@ -207,6 +207,18 @@ def _solve_layout(
         max_steps,
         secant,
     )
+    if secant:
+        # The secant's start holds no element at the cap: one that ended on it is beyond
+        # the layer's capacity where W there falls short of the load (W at the cap is
+        # evaluated only where some element ended there).
+        at_cap = s <= lower
+        capacity = jax.lax.cond(
+            jnp.any(at_cap),
+            lambda: vertical(_theta_from_s(lower, theta_cap)),
+            lambda: jnp.full_like(load, jnp.inf),
+        )
+        over = at_cap & (load >= capacity)
+        target = jnp.where(over, 0.5 * capacity, target)
 
     def entry(s, over, th_cap):  # theta0 at s (held at the cap where over it)
         return jnp.where(over, th_cap, _theta_from_s(s, th_cap))

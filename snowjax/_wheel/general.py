@@ -45,7 +45,6 @@ from .geometry import (
     _rim_sinkage_between,
     _shear_displacement,
     _sin_cos,
-    _sincos_half,
 )
 from .rules import AbstractContactRule
 from .start import _power_law_start, _scan_start, _warm_bracket_start
@@ -163,17 +162,26 @@ def _below_base(sinkage, depth):
 
 def _stresses_at(theta, theta_eff, contact, terrain, width, guard=True):
     """(sigma [Pa], c [Pa], tan phi [-], K [m]) at angles theta [rad] whose stress angle is
-    theta_eff [rad], of a wheel's `contact` (`AbstractContact`) of width b [m].
+    theta_eff [rad], of a wheel's `contact` (`AbstractContact`) of width b [m]: the
+    law's (`_law_at`), the contact having the last word on the normal stress
+    (`contact.normal_stress`: a tyre's flat carries its own pressure)."""
+    sigma, strength = _law_at(theta, theta_eff, contact, terrain, width, guard)
+    return contact.normal_stress(sigma, theta, theta_eff), *strength
 
-    The law at the depth of the stress angle's point, z = (the contact's deepest point)
-    less `contact.rise(theta, theta_eff)` (on a rim 4.5, `D [sin^2(theta0/2) -
-    sin^2(theta_eff/2)]`).  On a law with a base (`AbstractTerrain.has_base`) the normal
-    stress is the law at the height above the base, `pressure_at_clearance((depth - z_low)
-    + rise)`: free of the cancellation of depth - z next to the base, where a law such as
-    Wong's diverges (in float32 the rim sinkage rounds to the base within 4e-4 rad of the
-    lowest point).  The strength (c, tan phi, K) is the law's at z, kept 4 ulp above the
-    base (`_below_base`; `guard` False: not kept).  The contact has the last word on the
-    normal stress (`contact.normal_stress`: a tyre's flat carries its own pressure).
+
+def _law_at(theta, theta_eff, contact, terrain, width, guard=True):
+    """(sigma [Pa], (c [Pa], tan phi [-], K [m])): the terrain's law at the depth of the
+    point at angle theta [rad] whose stress angle is theta_eff [rad], of a wheel's
+    `contact` (`AbstractContact`) of width b [m].
+
+    The depth z = (the contact's deepest point) less `contact.rise(theta, theta_eff)`
+    (on a rim 4.5, `D [sin^2(theta0/2) - sin^2(theta_eff/2)]`).  On a law with a base
+    (`AbstractTerrain.has_base`) the normal stress is the law at the height above the
+    base, `pressure_at_clearance((depth - z_low) + rise)`: free of the cancellation of
+    depth - z next to the base, where a law such as Wong's diverges (in float32 the rim
+    sinkage rounds to the base within 4e-4 rad of the lowest point).  The strength (c,
+    tan phi, K) is the law's at z, kept 4 ulp above the base (`_below_base`; `guard`
+    False: not kept).
     """
     low = contact.lowest_sinkage()
     rise = contact.rise(theta, theta_eff)
@@ -192,7 +200,7 @@ def _stresses_at(theta, theta_eff, contact, terrain, width, guard=True):
         clearance = jnp.where(gap > 4 * eps * terrain.depth, gap, 0.0) + rise
         tiny = jnp.finfo(clearance.dtype).tiny
         sigma = terrain.pressure_at_clearance(jnp.maximum(clearance, tiny), width)
-    return contact.normal_stress(sigma, theta, theta_eff), cohesion, tan_phi, modulus
+    return sigma, (cohesion, tan_phi, modulus)
 
 
 def _panel_ends(points, theta_r, theta0, entry_scale):
@@ -276,45 +284,15 @@ def general_contact(
     wheel it has.
     """
     wheel, theta0 = contact.wheel, contact.entry_angle
-    dtype = theta0.dtype
-    diameter = wheel.diameter
-    r = diameter / 2
-    inf = jnp.asarray(jnp.inf, dtype)
-    theta_r = distribution.exit_angle(theta0, slip)
+    r = wheel.diameter / 2
     surface = jnp.zeros_like(theta0)
     k_surface = terrain.rim_properties(surface, type(wheel).contact_width(wheel, surface))[3]
-    entry_scale = running.entry_scale(law, theta0, slip, diameter, terrain, k_surface)
-    points = [(theta_r, inf), (theta0, entry_scale)]
-    points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
-    points += [(angle, inf) for angle in contact.panel_ends(distribution, slip)]
-    # A law with a base on the front region: the contact's lowest point (the rim's at
-    # theta = 0, a tyre's flat's front end) may lie on or next to the base, where the
-    # stress rises like ln(clearance + r theta^2 / 2); a short panel there takes it.
-    base_end = _front_base_end(distribution, terrain, contact)
-    if base_end is not None:
-        points.append((base_end + (theta0 - base_end) * BASE_PANEL, inf))
-    if braking and law.mobilises:
-        points.append(_braking_point(theta_r, slip, contact, terrain, distribution))
-    for breakpoint in terrain.breakpoint_sinkages():
-        # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
-        # and its mirror image in the rear region.
-        theta_f = _safe_arccos(jnp.cos(theta0) + breakpoint / r)
-        points.append((theta_f, inf))
-        points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
-
-    angles, scales = _panel_ends(points, theta_r, theta0, entry_scale)
-    log_end = None if base_end is None else angles[:-1] == base_end
-    theta, weight = _graded_half_panels(
-        angles[:-1], angles[1:], scales[:-1], scales[1:], n, dtype, log_end
+    entry_scale = running.entry_scale(law, theta0, slip, wheel.diameter, terrain, k_surface)
+    layout = _mirrored_nodes if distribution.mirrors_rear else _direct_nodes
+    theta, weight, (sin, cos, at), stresses = layout(
+        contact, slip, terrain, distribution, law, n, braking, entry_scale
     )
-
-    half_sin, half_cos = _sincos_half(theta)
-    sin = 2 * half_sin * half_cos
-    cos = 1 - 2 * half_sin**2
-    at = contact.points(theta, sin, cos)
-    # Normal stress: the terrain's law at the depth of the distribution's angle.
-    theta_eff = distribution.stress_angle(theta, theta0, slip)
-    sigma, cohesion, tan_phi, modulus = _stresses_at(theta, theta_eff, contact, terrain, at.width)
+    sigma, cohesion, tan_phi, modulus = stresses
     nodes = ContactNodes(
         contact=contact,
         terrain=terrain,
@@ -336,6 +314,109 @@ def general_contact(
     )
     total = _total(running.terms(law) + tuple(terms), nodes)
     return total.vertical_load if vertical_only else total.astuple()
+
+
+def _contact_points(contact, theta):
+    """(sin theta, cos theta, the contact's `ContactPoints`) at the nodes' angles theta
+    [rad]."""
+    sin, cos = _sin_cos(theta)
+    return sin, cos, contact.points(theta, sin, cos)
+
+
+def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale):
+    """(theta, weight, (sin theta, cos theta, `ContactPoints`), (sigma, c, tan phi, K)) at
+    the nodes
+    of panels cut at the contact's ends theta_r and theta0, the distribution's
+    breakpoints, the contact's shape's breaks, a base's lowest point, a braked wheel's
+    split and the angles where the contact reaches the terrain's breakpoints (and their
+    images in a rear region): the law evaluated at every node's stress angle."""
+    theta0 = contact.entry_angle
+    inf = jnp.asarray(jnp.inf, theta0.dtype)
+    theta_r = distribution.exit_angle(theta0, slip)
+    points = [(theta_r, inf), (theta0, entry_scale)]
+    points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
+    points += [(angle, inf) for angle in contact.panel_ends(distribution, slip)]
+    # A law with a base on the front region: the contact's lowest point (the rim's at
+    # theta = 0, a tyre's flat's front end) may lie on or next to the base, where the
+    # stress rises like ln(clearance + r theta^2 / 2); a short panel there takes it.
+    base_end = _front_base_end(distribution, terrain, contact)
+    if base_end is not None:
+        points.append((base_end + (theta0 - base_end) * BASE_PANEL, inf))
+    if braking and law.mobilises:
+        points.append(_braking_point(theta_r, slip, contact, terrain, distribution))
+    for theta_f in _breakpoint_angles(contact, terrain):
+        # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
+        # and its mirror image in the rear region.
+        points.append((theta_f, inf))
+        points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
+    angles, scales = _panel_ends(points, theta_r, theta0, entry_scale)
+    log_end = None if base_end is None else angles[:-1] == base_end
+    theta, weight = _graded_half_panels(
+        angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
+    )
+    geometry = _contact_points(contact, theta)
+    # Normal stress: the terrain's law at the depth of the distribution's angle.
+    theta_eff = distribution.stress_angle(theta, theta0, slip)
+    stresses = _stresses_at(theta, theta_eff, contact, terrain, geometry[2].width)
+    return theta, weight, geometry, stresses
+
+
+def _mirrored_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale):
+    """`_direct_nodes` for a distribution whose rear region [theta_r, theta_m] carries the
+    stress of the front region [theta_m, theta0] mirrored linearly (`WongReece`;
+    `AbstractStressDistribution.mirrors_rear`): the panels are cut in the stress angle
+    theta* in [theta_m, theta0], at theta0 and theta_m and at the stress angles of every
+    break of either region (the contact's shape, a braked wheel's split, the terrain's
+    breakpoints), and each node theta* stands for two contact points, theta* in front
+    and its mirror image theta_r + (theta0 - theta*) (theta_m - theta_r) / (theta0 -
+    theta_m) behind, which share the law's stress at theta* (evaluated once: the law
+    and the node map cost half as much as with nodes of their own in each region).
+    Returns the front nodes, then the rear ones."""
+    theta0 = contact.entry_angle
+    inf = jnp.asarray(jnp.inf, theta0.dtype)
+    theta_m, theta_r = distribution.rear_region(theta0, slip)
+    span = theta0 - theta_m
+    # Rear length per unit of stress angle (d theta / d theta* in the rear, in magnitude).
+    ratio = (theta_m - theta_r) / jnp.where(span > 0, span, 1.0)
+
+    def star(angle):  # the stress angle of a contact angle: itself in front
+        return distribution.stress_angle(angle, theta0, slip)
+
+    points = [(theta_m, inf), (theta0, entry_scale)]
+    points += [(star(angle), inf) for angle in contact.panel_ends(distribution, slip)]
+    if braking and law.mobilises:
+        split, width = _braking_point(theta_r, slip, contact, terrain, distribution)
+        # A split behind theta_m: its layer's width in theta*.
+        behind = split < theta_m
+        points.append((star(split), jnp.where(behind, width / jnp.maximum(ratio, 1e-12), width)))
+    points += [(theta_f, inf) for theta_f in _breakpoint_angles(contact, terrain)]
+    angles, scales = _panel_ends(points, theta_m, theta0, entry_scale)
+    front, weight = _graded_half_panels(
+        angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype
+    )
+    rear = theta_r + (theta0 - front) * ratio
+    theta = jnp.concatenate([front, rear])
+    geometry = _contact_points(contact, theta)
+    width_front, width_rear = jnp.split(jnp.broadcast_to(geometry[2].width, theta.shape), 2)
+    law_front, strength_front = _law_at(front, front, contact, terrain, width_front)
+    _, strength_rear = _law_at(rear, front, contact, terrain, width_rear)
+    sigma = contact.normal_stress(
+        jnp.concatenate([law_front, law_front]), theta, jnp.concatenate([front, front])
+    )
+    strength = [
+        jnp.concatenate([jnp.broadcast_to(f, front.shape), jnp.broadcast_to(r, rear.shape)])
+        for f, r in zip(strength_front, strength_rear)
+    ]
+    return theta, jnp.concatenate([weight, weight * ratio]), geometry, (sigma, *strength)
+
+
+def _breakpoint_angles(contact, terrain):
+    """The rim angles [rad] where the front of the contact reaches each of the terrain's
+    breakpoint sinkages (`AbstractTerrain.breakpoint_sinkages`): cos theta = cos theta0
+    + z_b / r (4.5); 0 where the contact does not reach it."""
+    theta0, r = contact.entry_angle, contact.wheel.diameter / 2
+    cos0 = _sin_cos(theta0)[1]
+    return [_safe_arccos(cos0 + z_b / r) for z_b in terrain.breakpoint_sinkages()]
 
 
 def _deepest_stress_angle(distribution, slip, theta0):

@@ -136,38 +136,20 @@ def _power_law_start(vertical, theta_cap, load, wheel, terrain):
     `_power_law_root`, the secant's first slope d ln W / d s^2 = -m from its exponent,
     and the whole range [s_min, S_MAX] as the bracket.
 
-    The layer's capacity (W at the cap) decides which elements it cannot carry; it is
-    evaluated (a `lax.cond`, once for the batch) only where some element may be beyond
-    it: on a law with a base, where the model's root lies deeper than half the cap's
-    sinkage; on one without, where the model carries less than three times the load at
-    the cap (85 degrees: the model errs by tens of % there, and a braked wheel's
-    backward shear takes from W).  It then also serves as f at the bracket's lower end.
-    Measured on the thesis tyre, 1-9 kN (Bekker's snow / 9, Reece's sand / 4), slips
-    -0.3 to 0.9, front region and Wong–Reece: the secant steps reach |ln(W / F_z)| <
-    1e-10 in 4-7 evaluations of W, where the start this replaced took four (W at two
-    entry angles, two secant steps) and Newton two more with tangents."""
-    s_lo = _s_min(load.dtype)
-    theta, exponent, model_capacity = _power_law_root(wheel, terrain, load, theta_cap)
+    No element is held at the cap: the layer's capacity is evaluated after the solve,
+    only where an element ended on the cap (`equilibrium._solve_layout`; the secant
+    steps take the cap where they would pass it).  Measured on the thesis tyre, 1-9 kN
+    (Bekker's snow / 9, Reece's sand / 4), slips -0.3 to 0.9, front region and
+    Wong–Reece: the secant steps reach |ln(W / F_z)| < 1e-10 in 4-7 evaluations of W,
+    where the start this replaced took four (W at two entry angles, two secant steps)
+    and Newton two more with tangents."""
+    del vertical
+    theta, exponent = _power_law_root(wheel, terrain, load, theta_cap)[:2]
     s0 = _s_of_theta(theta, theta_cap)
-    lower = jnp.full_like(load, s_lo)
-    if terrain.has_base():
-        maybe_over = jnp.sin(theta / 2) ** 2 > 0.5 * jnp.sin(theta_cap / 2) ** 2
-    else:
-        maybe_over = model_capacity < 3 * load
-    capacity = jax.lax.cond(
-        jnp.any(maybe_over),
-        lambda: vertical(_theta_from_s(lower, theta_cap)),
-        lambda: jnp.full_like(load, jnp.inf),
-    )
-    over = load >= capacity
-    target = jnp.where(over, 0.5 * capacity, load)
-    f_lower = jnp.where(jnp.isfinite(capacity), _log_ratio(capacity, target), jnp.inf)
-    secant = dict(
-        slope=-exponent,
-        f_lower=jax.lax.stop_gradient(f_lower),
-        f_upper=jnp.full_like(load, -jnp.inf),
-    )
-    return over, target, lower, jnp.full_like(load, S_MAX), s0, secant
+    lower = jnp.full_like(load, _s_min(load.dtype))
+    secant = dict(slope=-exponent, f_upper=jnp.full_like(load, -jnp.inf))
+    over = jnp.zeros_like(load, dtype=bool)
+    return over, load, lower, jnp.full_like(load, S_MAX), s0, secant
 
 
 # The second entry angle of the two-point start, s^2 = 8 (theta0 = e^-8 theta_cap).

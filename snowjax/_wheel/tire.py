@@ -421,9 +421,13 @@ class TreadContact(AbstractContact):
     def panel_ends(self, distribution, slip) -> list[Array]:
         """The flat's ends (the normal's direction turns there; the rear end only where
         the contact extends behind the axle) and, in a rear region, the angles whose
-        stress angle is the flat's front end (the sinkage's kink)."""
+        stress angle is the flat's front end (the sinkage's kink; not where the rear
+        mirrors the front, `mirrors_rear`: the integrator cuts its panels in the stress
+        angle there, where that image is the front end itself)."""
         half, theta0 = self.tread.half_angle, self.entry_angle
         ends = [half] if _is_front(distribution) else [half, -half]
+        if distribution.mirrors_rear:
+            return ends
         return ends + list(distribution.rear_angles(half, theta0, slip))
 
     def shear_sign_change(self, exit_angle, slip, rear: bool) -> tuple[Array, Array]:
