@@ -737,15 +737,16 @@ def test_the_closed_form_start_lies_within_one_percent_of_the_root():
 
 
 def test_the_power_law_start_and_its_secant_steps_find_the_root():
-    """The any-terrain rule's cold start on a law that rises (`start._power_law_start`:
-    the entry angle at which a power-law model of the law carries the load, no
-    quadrature) lies within 5 % of the root on Bekker's snow (front region; measured
-    4.0 %), and the secant steps from it (`BracketedSecant`, one W each) end the solve
-    within 5 steps on a rim (Bekker's snow, front region and Wong–Reece; Reece's sand
-    and Wong snow with Wong–Reece; measured 3-5, driven and braked) and within 8 on a
-    100 kPa tyre on Wong snow, whose W bends at its switch to the elastic mode (7-8):
-    with that `max_steps` every element ends as with the default 64.  1-9 kN (/ 9, / 4
-    on the soils); slips 0-0.9 and -0.5 to -0.05."""
+    """The any-terrain rule's cold start on a law that rises (`start._power_law_start`: the
+    entry angle at which a power-law model of the law carries the load, no quadrature)
+    lies within 5 % of the root on Bekker's snow (front region; measured 4.0 %) and on
+    Reece's sand with Wong–Reece (2.2 %), and the secant steps from it
+    (`BracketedSecant`, one W each) end the solve within 5 steps on a rim (Bekker's
+    snow, front region and Wong–Reece; Reece's sand and Wong snow with Wong–Reece;
+    measured 3-5, driven and braked) and within 8 on a 100 kPa tyre on Wong snow, whose
+    W bends at its switch to the elastic mode (7-8): with that `max_steps` every element
+    ends as with the default 64. 1-9 kN (/ 9, / 4 on the soils); slips 0-0.9 and -0.5 to
+    -0.05."""
     from snowjax._wheel.contact import _contact_batch
     from snowjax._wheel.equilibrium import _entry_angle_cap
     from snowjax._wheel.front_rim import _ANY_TERRAIN_RULE
@@ -775,6 +776,18 @@ def test_the_power_law_start_and_its_secant_steps_find_the_root():
         vertical, cap, jnp.asarray(load / 9), jnp.asarray(slip), w, t, d, law, False
     )
     root = sj.solve_wheel(rim, bekker, load / 9, slip)
+    assert np.all(np.asarray(root.status) == Status.CONVERGED)
+    error = np.asarray(_theta_from_s(start[4], cap)) / np.asarray(root.entry_angle) - 1
+    assert np.max(np.abs(error)) < 0.05, np.max(np.abs(error))
+    # With Wong–Reece the model carries the load over the mirrored rear region as well
+    # (Reece's sand: measured 2.2 %; 25 % with the front region's model).
+    leaves = jax.tree.map(lambda x: jnp.broadcast_to(x, (n,)), (rim, reece, rear))
+    w, t, d = leaves
+    cap = _entry_angle_cap(type(w).deepest_reach(w, t), w.diameter)[0]
+    start = _ANY_TERRAIN_RULE.start(
+        vertical, cap, jnp.asarray(load / 4), jnp.asarray(slip), w, t, d, law, False
+    )
+    root = sj.solve_wheel(rim, sj.ContactModel(reece, distribution=rear), load / 4, slip)
     assert np.all(np.asarray(root.status) == Status.CONVERGED)
     error = np.asarray(_theta_from_s(start[4], cap)) / np.asarray(root.entry_angle) - 1
     assert np.max(np.abs(error)) < 0.05, np.max(np.abs(error))

@@ -475,7 +475,7 @@ class AnyTerrainRule(AbstractGeneralRule):
     ):  # fmt: skip
         del shear
         if terrain.pressure_rises():
-            return _power_law_start(vertical, theta_cap, load, wheel, terrain)
+            return _power_law_start(theta_cap, load, slip, wheel, terrain, distribution)
         deepest = functools.partial(_deepest_stress_angle, distribution, slip)
         # A wheel's bends serve the driving layout: a braked wheel's W is no power of
         # theta0 between the grid's points either way (a 100 kPa tyre on Bekker's snow
