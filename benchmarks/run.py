@@ -438,41 +438,51 @@ def main(argv=None):
         reece = sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02)
         beta = np.deg2rad(10.0)
         bulldozing = sj.Lateral(unit_weight=5e3, bulldozing=True)
-        terrains = {  # name: (terrain, distribution, load divisor, slip angle, lateral)
-            "WongSnow + Wong-Reece": (SNOW, wong_reece, 1, 0.0, None),
-            "BekkerSoil.snow_us, front region": (sj.BekkerSoil.snow_us(), None, 9, 0.0, None),
-            "BekkerSoil.snow_us + Wong-Reece": (sj.BekkerSoil.snow_us(), wong_reece, 9, 0.0, None),
-            "ReeceSoil (test sand), front region": (reece, None, 4, 0.0, None),
-            "ReeceSoil (test sand) + Wong-Reece": (reece, wong_reece, 4, 0.0, None),
-            "LayeredSnow.ice_layer_example, front region": (
-                sj.LayeredSnow.ice_layer_example(), None, 4, 0.0, None,
-            ),
-            "WongSnow, slip angle 10 deg, front region": (SNOW, None, 1, beta, None),
-            "WongSnow, slip angle 10 deg + Wong-Reece + bulldozing": (
-                SNOW, wong_reece, 1, beta, bulldozing,
-            ),
-            # The deflecting tyre (the thesis tyre's size, section height 0.176 m, 100 kPa:
-            # both modes over these loads), against the rigid rows of the same terrain.
-            "DeflectingTire 100 kPa on WongSnow, front region": (SNOW, None, 1, 0.0, None),
-            "DeflectingTire 100 kPa on BekkerSoil.snow_us, front region": (
-                sj.BekkerSoil.snow_us(), None, 9, 0.0, None,
-            ),
-            # Ruts 2-12 cm deep left in the thesis snow by the same wheel (k_0 = 1 MPa/m,
-            # A_u = 5 MPa/m^2, as benchmarks/ruts.py): against the Wong front-region row,
-            # the same wheel, loads and slips on the virgin snow.
-            "Rut of WongSnow (2-12 cm), front region": (
-                sj.Rut(SNOW, np.random.default_rng(1).uniform(0.02, 0.12, n_ref), WHEEL.width,
-                       1e6, 5e6),
-                None, 1, 0.0, None,
-            ),
-        }  # fmt: skip
-        tire = sj.DeflectingTire(WHEEL.diameter, WHEEL.width, 0.176, 100e3)
-        rigid_rows = {
-            "DeflectingTire 100 kPa on WongSnow, front region": f"throughput_{n_ref}",
-            "DeflectingTire 100 kPa on BekkerSoil.snow_us, front region": (
-                "throughput_BekkerSoil.snow_us, front region"
-            ),
+        bekker, layered = sj.BekkerSoil.snow_us(), sj.LayeredSnow.ice_layer_example()
+        laws = {  # name: (terrain, load divisor)
+            "WongSnow": (SNOW, 1),
+            "BekkerSoil.snow_us": (bekker, 9),
+            "ReeceSoil (test sand)": (reece, 4),
+            "LayeredSnow.ice_layer_example": (layered, 4),
         }
+        # name: (terrain, distribution, load divisor, slip angle, lateral); every law with
+        # each distribution, straight and at a slip angle of 10 degrees (the Wong front
+        # region straight is the reference row above).
+        terrains = {}
+        for law, (terrain, divisor) in laws.items():
+            for angle, running in ((0.0, ""), (beta, ", slip angle 10 deg")):
+                for dist, region in ((None, ", front region"), (wong_reece, " + Wong-Reece")):
+                    if law == "WongSnow" and dist is None and angle == 0.0:
+                        continue
+                    terrains[f"{law}{running}{region}"] = (terrain, dist, divisor, angle, None)
+        terrains["WongSnow, slip angle 10 deg + Wong-Reece + bulldozing"] = (
+            SNOW, wong_reece, 1, beta, bulldozing,
+        )  # fmt: skip
+        # The deflecting tyre (the thesis tyre's size, section height 0.176 m, 100 kPa:
+        # both modes over these loads), against the rigid rows of the same terrain and
+        # distribution.
+        tires = {
+            "WongSnow, front region": (SNOW, None, 1),
+            "WongSnow + Wong-Reece": (SNOW, wong_reece, 1),
+            "BekkerSoil.snow_us, front region": (bekker, None, 9),
+            "BekkerSoil.snow_us + Wong-Reece": (bekker, wong_reece, 9),
+            "ReeceSoil (test sand), front region": (reece, None, 4),
+        }
+        rigid_rows = {}
+        for rigid, (terrain, dist, divisor) in tires.items():
+            name = f"DeflectingTire 100 kPa on {rigid}"
+            terrains[name] = (terrain, dist, divisor, 0.0, None)
+            reference = rigid == "WongSnow, front region"
+            rigid_rows[name] = f"throughput_{n_ref}" if reference else f"throughput_{rigid}"
+        # Ruts 2-12 cm deep left in the thesis snow by the same wheel (k_0 = 1 MPa/m,
+        # A_u = 5 MPa/m^2, as benchmarks/ruts.py): against the Wong front-region row, the
+        # same wheel, loads and slips on the virgin snow.
+        terrains["Rut of WongSnow (2-12 cm), front region"] = (
+            sj.Rut(SNOW, np.random.default_rng(1).uniform(0.02, 0.12, n_ref), WHEEL.width,
+                   1e6, 5e6),
+            None, 1, 0.0, None,
+        )  # fmt: skip
+        tire = sj.DeflectingTire(WHEEL.diameter, WHEEL.width, 0.176, 100e3)
         for name, (terrain, dist, divisor, angle, lateral) in terrains.items():
             wheel = tire if name in rigid_rows else WHEEL
 

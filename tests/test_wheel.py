@@ -805,3 +805,19 @@ def test_the_power_law_start_and_its_secant_steps_find_the_root():
             short = sj.solve_wheel(wheel, model, load / divisor, slips, max_steps=steps)
             assert np.mean(np.asarray(default.status) == Status.CONVERGED) > 0.4
             np.testing.assert_array_equal(np.asarray(short.status), np.asarray(default.status))
+
+
+def test_a_tyre_across_its_mode_switch_with_wong_reece_converges():
+    """Three cases of `benchmarks/run.py`'s 100 kPa tyre on Wong snow with Wong–Reece
+    whose secant step crosses the tyre's switch to the elastic mode (ln(W / F_z) 0.18 ->
+    3e-6 -> 4e-7): the contraction of a step from outside the superlinear regime must not
+    predict the stop (`BracketedSecant`; it did, and they ended NOT_CONVERGED 4e-7 off)."""
+    rim, snow = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
+    tire = sj.DeflectingTire(rim.diameter, rim.width, 0.176, 100e3)
+    model = sj.ContactModel(snow, distribution=sj.WongReece(0.43, 0.32))
+    load = np.array([1227.09871468, 2828.87445657, 3174.84476453])
+    slip = np.array([0.8986301, 0.54302255, 0.23806436])
+    state = sj.solve_wheel(tire, model, load, slip)
+    np.testing.assert_array_equal(np.asarray(state.status), Status.CONVERGED)
+    w = sj.contact_forces(tire, model, state.entry_angle, slip).vertical_load
+    np.testing.assert_allclose(np.asarray(w), load, rtol=1e-8)

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import equinox as eqx
 import jax
@@ -102,23 +102,26 @@ class BracketedNewton(optx.AbstractRootFinder):
         (optimistix stops iterating at the first result that is not `successful`, so an
         unfinished solve must report success.)"""
         del fn, args, options, tags
-        finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
-        failed = finished & ~jnp.all(state.converged)
-        result = optx.RESULTS.where(
-            failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful
-        )
-        return finished, result
+        return _terminate(state)
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         del fn, args, options, state, tags, result
-        stats: dict[str, Any] = {}
-        return y, aux, stats
+        return y, aux, {}
 
 
 # |f| below which two Newton steps in a row predict the next residual (`_finished`), and
 # the margin of that prediction below the tolerance.
 QUADRATIC_REGIME = 1e-3
 PREDICTION_MARGIN = 0.1
+
+
+def _terminate(state) -> tuple[Array, optx.RESULTS]:
+    """(finished, result) of a bracketed solve: finished where every element converged or
+    collapsed; `nonlinear_divergence` where then some element did not converge."""
+    finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
+    failed = finished & ~jnp.all(state.converged)
+    result = optx.RESULTS.where(failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful)
+    return finished, result
 
 
 def _finished(previous: _BracketState, state: _BracketState, y, atol, rtol) -> tuple[Array, Array]:
@@ -184,9 +187,9 @@ class BracketedSecant(optx.AbstractRootFinder):
     `BracketedNewton`'s, the prediction from the secant's superlinear convergence: after
     two secant steps in a row (each through two evaluated points: not the first step,
     whose slope is the start's estimate and whose contraction says nothing of the
-    next) with |f| <= `QUADRATIC_REGIME`, the next residual |f_k|^2 / |f_(k-1)| (the
-    last contraction repeated: the secant's only improves, e_(k+1) / e_k = C e_(k-1)
-    < C e_(k-2) = e_k / e_(k-1)) below `PREDICTION_MARGIN` atol.
+    next) with both residuals <= `QUADRATIC_REGIME`, the next residual |f_k|^2 / |f_(k-1)|
+    (the last contraction repeated: the secant's only improves, e_(k+1) / e_k = C
+    e_(k-1) < C e_(k-2) = e_k / e_(k-1)) below `PREDICTION_MARGIN` atol.
     """
 
     rtol: float
@@ -255,29 +258,26 @@ class BracketedSecant(optx.AbstractRootFinder):
     def terminate(self, fn, y, args, options, state: _SecantState, tags):
         """As `BracketedNewton.terminate`."""
         del fn, args, options, tags
-        finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
-        failed = finished & ~jnp.all(state.converged)
-        result = optx.RESULTS.where(
-            failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful
-        )
-        return finished, result
+        return _terminate(state)
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         del fn, args, options, state, tags, result
-        stats: dict[str, Any] = {}
-        return y, aux, stats
+        return y, aux, {}
 
 
 def _secant_finished(previous, state, y, atol, rtol) -> tuple[Array, Array]:
     """`_finished` for `BracketedSecant`: (converged, collapsed), latched.  Converged:
     |f| <= atol and the step below atol + rtol |y|; or, after two secant steps in a row
-    with |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last contraction,
-    |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
+    with both |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last
+    contraction, |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
     scale = atol + rtol * jnp.abs(y)
     f = jnp.abs(state.f)
     confirmed = (f <= atol) & (jnp.abs(state.diff) <= scale)
     ratio = f / jnp.where(previous.interpolated, jnp.abs(previous.f), jnp.inf)
+    # Both residuals in the regime: a contraction from far out (a step across a tyre's
+    # mode switch, f 0.18 -> 3e-6 -> 4e-7) says nothing of the next one.
     regime = state.interpolated & previous.interpolated & (f <= QUADRATIC_REGIME)
+    regime &= jnp.abs(previous.f) <= QUADRATIC_REGIME
     predicted = regime & (f * ratio <= PREDICTION_MARGIN * atol)
     converged = previous.converged | confirmed | predicted
     collapsed = previous.collapsed | (state.upper - state.lower <= scale)
