@@ -132,39 +132,44 @@ def test_a_secant_step_stays_in_its_bracket_and_predicts_from_its_contraction():
     """A secant step through the last point that would leave the bracket takes regula
     falsi where f is known at both ends, bisection where not; an element converges
     when the last contraction |f_k / f_(k-1)|, repeated, predicts a residual below 0.1
-    atol after two secant steps through evaluated points (`bracketed._secant_finished`;
-    a first step, whose slope is the start's estimate, predicts nothing), and stays
-    converged."""
+    atol after two secant steps through evaluated points, both residuals within the
+    superlinear regime (|f| <= 1e-3; `bracketed._secant_finished`; a first step, whose
+    slope is the start's estimate, predicts nothing, nor does a contraction from
+    outside the regime), and stays converged."""
     solver = BracketedSecant(rtol=1e-9, atol=1e-9)
-    n = 6
+    n = 7
     y = jnp.full(n, 0.5)
     inf = jnp.full(n, jnp.inf)
     no = jnp.zeros(n, bool)
     previous = _SecantState(
         lower=jnp.zeros(n), upper=jnp.ones(n),
-        f_lower=jnp.array([jnp.inf, 1.0, 1.0, 1.0, 1.0, 1.0]),
-        f_upper=jnp.array([-jnp.inf, -1.0, -1.0, -1.0, -1.0, -1.0]),
-        x_last=jnp.full(n, 0.24), f_last=jnp.array([0.91, 0.91, 1e-2, 1e-2, 1e-2, jnp.nan]),
-        slope=jnp.full(n, -1.0), f=jnp.array([0.91, 0.91, 1e-2, 1e-2, 1e-2, jnp.inf]), diff=inf,
-        interpolated=jnp.array([False, False, True, True, False, False]),
+        f_lower=jnp.array([jnp.inf, 1.0, 1.0, 1.0, 1.0, 1.0, 1.0]),
+        f_upper=jnp.array([-jnp.inf, -1.0, -1.0, -1.0, -1.0, -1.0, -1.0]),
+        x_last=jnp.full(n, 0.24),
+        f_last=jnp.array([0.91, 0.91, 1e-4, 1e-4, 1e-4, jnp.nan, 1e-2]),
+        slope=jnp.full(n, -1.0),
+        f=jnp.array([0.91, 0.91, 1e-4, 1e-4, 1e-4, jnp.inf, 1e-2]),
+        diff=inf,
+        interpolated=jnp.array([False, False, True, True, False, False, True]),
         converged=no.at[3].set(True), collapsed=no,
     )  # fmt: skip
     # f at y = 0.5 (x = 0.25): 0, 1 far from the root, where the secant through the last
-    # point (slope -1 in x) runs out of [0, 1]; 2-5 close to it, 5 at its first step
+    # point (slope -1 in x) runs out of [0, 1]; 2-6 close to it, 5 at its first step
     # (no point evaluated before: the start's slope).
-    f_now = jnp.array([0.9, 0.9, 5e-7, 5e-7, 5e-7, 5e-7])
+    f_now = jnp.array([0.9, 0.9, 5e-8, 5e-8, 5e-8, 5e-8, 5e-8])
     new_y, state, _ = solver.step(lambda z, _: (f_now + 0 * z, None), y, None, {}, previous, None)
     new_y = np.asarray(new_y)
     # 0: bisection of [0.5, 1] (f at its upper end unknown); 1: regula falsi in y^2
     # between f(0.5) = 0.9 and f(1) = -1.
     assert new_y[0] == pytest.approx(0.75, rel=1e-12)
     assert new_y[1] == pytest.approx(np.sqrt(0.25 + 0.9 / 1.9 * 0.75), rel=1e-12)
-    # 2: the secant step; 5e-7 (5e-7 / 1e-2) = 2.5e-11 <= 1e-10 after two secant steps:
+    # 2: the secant step; 5e-8 (5e-8 / 1e-4) = 2.5e-11 <= 1e-10 after two secant steps:
     # converged.  3: converged before, stays where it was.  4: as 2, but the step that
-    # reached y was the first (the start's slope): no prediction.
-    assert new_y[2] == pytest.approx(np.sqrt(0.25 + 5e-7 * 0.01 / (1e-2 - 5e-7)), rel=1e-12)
-    assert np.asarray(state.converged).tolist() == [False, False, True, True, False, False]
+    # reached y was the first (the start's slope): no prediction.  6: as 2, but from
+    # f = 1e-2, outside the regime (5e-8 (5e-8 / 1e-2) = 2.5e-13 would predict): none.
+    assert new_y[2] == pytest.approx(np.sqrt(0.25 + 5e-8 * 0.01 / (1e-4 - 5e-8)), rel=1e-12)
+    assert np.asarray(state.converged).tolist() == [False, False, True, True, False, False, False]
     assert new_y[3] == 0.5
     # 5 took the start's slope: the step after it predicts nothing either.
-    assert new_y[5] == pytest.approx(np.sqrt(0.25 + 5e-7), rel=1e-12)
-    assert np.asarray(state.interpolated).tolist() == [False, False, True, True, True, False]
+    assert new_y[5] == pytest.approx(np.sqrt(0.25 + 5e-8), rel=1e-12)
+    assert np.asarray(state.interpolated).tolist() == [False, False, True, True, True, False, True]

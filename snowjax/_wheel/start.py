@@ -89,7 +89,7 @@ def _warm_bracket_start(vertical, theta_cap, load, guess):
     return over, target, s_min, jnp.full_like(load, S_MAX), _warm_start(guess, theta_cap)
 
 
-def _power_law_root(wheel, terrain, load, theta_cap, region=None):
+def _power_law_root(wheel, terrain, load, theta_cap, distribution, slip):
     """(theta0 [rad], m [-]): the entry angle at which a rigid rim carries `load` [N]
     without shear if the law were, near the rim's deepest point, a power of the sinkage
     with its local exponent there; m = d ln W / d ln theta0 of that model, 2 n + 1.
@@ -102,7 +102,7 @@ def _power_law_root(wheel, terrain, load, theta_cap, region=None):
     / (4 n + pi))` (within 0.6 % for every n >= 0, exact at n = 0 and as n -> infinity;
     a gamma function per step cost as much as the rest of the start).  A distribution
     whose rear region [theta_r, theta_m] mirrors the front [theta_m, theta0] linearly
-    (`region(theta0)` = (theta_m, theta_r), `AbstractStressDistribution.rear_region`)
+    (`AbstractStressDistribution.mirrors_rear`, `rear_region`), on a law without a base,
     carries the front's stresses over u_m..1 on both: W times (1 - u_r) / (1 - u_m)
     I(u_m) / I(0), I(a) = int_a^1 (1 - u^2)^n du ~ (1 - a)^(n+1) (2 - (1 - a) (n + 1) /
     (n + 2))^n / (n + 1) (the smooth factor (1 + u)^n at the mean of the weight (1 -
@@ -115,6 +115,7 @@ def _power_law_root(wheel, terrain, load, theta_cap, region=None):
     (`_power_law_start`), whose steps correct the model's misfit (shear, a tyre's flat,
     the law's departure from a power)."""
     d, b = wheel.diameter, wheel.width
+    mirrored = distribution.mirrors_rear and not terrain.has_base()
     z_cap = d * jnp.sin(theta_cap / 2) ** 2
     top = jnp.log(jnp.maximum(z_cap, jnp.finfo(z_cap.dtype).tiny)) + float(np.log1p(-1e-9))
     tiny = jnp.finfo(load.dtype).tiny
@@ -123,15 +124,18 @@ def _power_law_root(wheel, terrain, load, theta_cap, region=None):
         rest = 1 - a
         return rest ** (n + 1) * (2 - rest * (n + 1) / (n + 2)) ** n / (n + 1)
 
+    def entry(z):  # theta0 [rad] of the rim whose lowest point is z [m] deep
+        return 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z / d, 0.0, 1.0)))
+
     def model(z):  # (W [N], n [-]) of the model at the lowest point's sinkage z [m]
         sigma, slope = jax.jvp(lambda z: terrain.pressure(z, b), (z,), (jnp.ones_like(z),))
         ok = jnp.isfinite(sigma) & jnp.isfinite(slope) & (sigma > 0)
         n = jnp.clip(jnp.where(ok, z * slope / jnp.where(ok, sigma, 1.0), 50.0), 0.05, 50.0)
         sigma = jnp.where(ok, sigma, jnp.finfo(load.dtype).max)
         w = b * jnp.sqrt(d * z) * sigma * jnp.sqrt(np.pi / (4 * n + np.pi))
-        if region is not None:
-            theta0 = 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z / d, 0.0, 1.0)))
-            theta_m, theta_r = region(theta0)
+        if mirrored:
+            theta0 = entry(z)
+            theta_m, theta_r = distribution.rear_region(theta0, slip)
             u_m = jnp.clip(theta_m / theta0, 0.0, 0.99)
             u_r = jnp.clip(theta_r / theta0, -1.0, u_m)
             w = w * (1 - u_r) / (1 - u_m) * tail(u_m, n) / tail(0.0, n)
@@ -145,8 +149,7 @@ def _power_law_root(wheel, terrain, load, theta_cap, region=None):
     start = jnp.minimum(jnp.log(0.02 * d), top)
     z0 = jnp.exp(jax.lax.fori_loop(0, 5, newton, start))
     n = model(z0)[1]
-    theta = 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z0 / d, 0.0, 1.0)))
-    return jax.lax.stop_gradient((theta, 2 * n + 1))
+    return jax.lax.stop_gradient((entry(z0), 2 * n + 1))
 
 
 def _power_law_start(theta_cap, load, slip, wheel, terrain, distribution):
@@ -167,10 +170,7 @@ def _power_law_start(theta_cap, load, slip, wheel, terrain, distribution):
     snow with Wong–Reece 5; the 100 kPa tyre on Wong snow 6-7), where the start this
     replaced took four (W at two entry angles, two secant steps) and Newton two more
     with tangents."""
-    region = None
-    if distribution.mirrors_rear and not terrain.has_base():
-        region = lambda theta0: distribution.rear_region(theta0, slip)  # noqa: E731
-    theta, exponent = _power_law_root(wheel, terrain, load, theta_cap, region)
+    theta, exponent = _power_law_root(wheel, terrain, load, theta_cap, distribution, slip)
     s0 = _s_of_theta(theta, theta_cap)
     lower = jnp.full_like(load, _s_min(load.dtype))
     secant = dict(slope=-exponent, f_upper=jnp.full_like(load, -jnp.inf))
