@@ -148,7 +148,6 @@ def test_a_secant_step_stays_in_its_bracket_and_predicts_from_its_contraction():
         x_last=jnp.full(n, 0.24),
         f_last=jnp.array([0.91, 0.91, 1e-4, 1e-4, 1e-4, jnp.nan, 1e-2]),
         slope=jnp.full(n, -1.0),
-        f=jnp.array([0.91, 0.91, 1e-4, 1e-4, 1e-4, jnp.inf, 1e-2]),
         diff=inf,
         interpolated=jnp.array([False, False, True, True, False, False, True]),
         converged=no.at[3].set(True), collapsed=no,

@@ -162,7 +162,6 @@ class _SecantState(eqx.Module):
     f_last: Float[Array, " n"]
     # df/dx where no point has been evaluated yet (the start's estimate).
     slope: Float[Array, " n"]
-    f: Float[Array, " n"]
     diff: Float[Array, " n"]
     # Whether the last step was a secant step through two evaluated points (its
     # residuals can predict the next one).
@@ -210,7 +209,7 @@ class BracketedSecant(optx.AbstractRootFinder):
         return _SecantState(
             lower, upper, option("f_lower", jnp.inf), option("f_upper", -jnp.inf),
             option("x_last", 0.0), option("f_last", jnp.nan), option("slope", -1.0),
-            inf, inf, no, no, collapsed,
+            inf, no, no, collapsed,
         )  # fmt: skip
 
     def step(self, fn, y, args, options, state: _SecantState, tags):
@@ -249,7 +248,7 @@ class BracketedSecant(optx.AbstractRootFinder):
         # or bisection): the contractions of two of them in a row predict the next.
         secant = inside & known
         new = _SecantState(
-            lower, upper, f_lower, f_upper, x, f, state.slope, f, y - new_y, secant,
+            lower, upper, f_lower, f_upper, x, f, state.slope, y - new_y, secant,
             state.converged, state.collapsed,
         )  # fmt: skip
         flags = _secant_finished(state, new, new_y, self.atol, self.rtol)
@@ -271,13 +270,13 @@ def _secant_finished(previous, state, y, atol, rtol) -> tuple[Array, Array]:
     with both |f| <= `QUADRATIC_REGIME`, the next residual predicted by the last
     contraction, |f_k| |f_k / f_(k-1)|, below `PREDICTION_MARGIN` atol."""
     scale = atol + rtol * jnp.abs(y)
-    f = jnp.abs(state.f)
+    f = jnp.abs(state.f_last)
     confirmed = (f <= atol) & (jnp.abs(state.diff) <= scale)
-    ratio = f / jnp.where(previous.interpolated, jnp.abs(previous.f), jnp.inf)
+    ratio = f / jnp.where(previous.interpolated, jnp.abs(previous.f_last), jnp.inf)
     # Both residuals in the regime: a contraction from far out (a step across a tyre's
     # mode switch, f 0.18 -> 3e-6 -> 4e-7) says nothing of the next one.
     regime = state.interpolated & previous.interpolated & (f <= QUADRATIC_REGIME)
-    regime &= jnp.abs(previous.f) <= QUADRATIC_REGIME
+    regime &= jnp.abs(previous.f_last) <= QUADRATIC_REGIME
     predicted = regime & (f * ratio <= PREDICTION_MARGIN * atol)
     converged = previous.converged | confirmed | predicted
     collapsed = previous.collapsed | (state.upper - state.lower <= scale)

@@ -325,8 +325,7 @@ def _contact_points(contact, theta):
 
 def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale):
     """(theta, weight, (sin theta, cos theta, `ContactPoints`), (sigma, c, tan phi, K)) at
-    the nodes
-    of panels cut at the contact's ends theta_r and theta0, the distribution's
+    the nodes of panels cut at the contact's ends theta_r and theta0, the distribution's
     breakpoints, the contact's shape's breaks, a base's lowest point, a braked wheel's
     split and the angles where the contact reaches the terrain's breakpoints (and their
     images in a rear region): the law evaluated at every node's stress angle."""

@@ -173,7 +173,7 @@ def _power_law_start(theta_cap, load, slip, wheel, terrain, distribution):
     theta, exponent = _power_law_root(wheel, terrain, load, theta_cap, distribution, slip)
     s0 = _s_of_theta(theta, theta_cap)
     lower = jnp.full_like(load, _s_min(load.dtype))
-    secant = dict(slope=-exponent, f_upper=jnp.full_like(load, -jnp.inf))
+    secant = dict(slope=-exponent)
     over = jnp.zeros_like(load, dtype=bool)
     return over, load, lower, jnp.full_like(load, S_MAX), s0, secant
 
