@@ -438,3 +438,41 @@ def test_fit_wheel_recovers_lateral_modulus_from_synthetic_lateral_forces():
         sj.fit_wheel(
             WHEEL, start, loads, slips, {"lateral_force": st.lateral_force}, fit=("tan_phi",)
         )
+
+
+def test_a_vmapped_warm_start_takes_one_layout_for_the_whole_batch():
+    """Vmapped (the rover's environments, four wheels each), the warm-started solve at a
+    slip angle chooses its quadrature layout for the whole batch, as one flat batch of
+    the same elements does (`batchwide._any_in_batch`): one braked wheel anywhere gives
+    every element the four-panel layout.  A choice per environment (a batched
+    `lax.cond`) had run both layouts for every environment."""
+    from snowjax._wheel.batchwide import _all_in_batch, _any_in_batch
+
+    x = jnp.array([[False, False], [False, True]])
+    # one value for the batch (broadcast back to its shape by vmap); per row it would be
+    # [False, True]
+    np.testing.assert_array_equal(jax.vmap(_any_in_batch)(x), [True, True])
+    np.testing.assert_array_equal(jax.vmap(_all_in_batch)(~x), [False, False])
+    np.testing.assert_array_equal(jax.vmap(jax.vmap(_any_in_batch))(x), np.ones((2, 2), bool))
+    np.testing.assert_array_equal(jax.vmap(_any_in_batch)(x[:1]), [False])
+
+    wheel, snow = sj.RigidWheel.thesis_tire(), sj.WongSnow.thesis_fresh_snow()
+    loads = jnp.array([[3e3, 5e3], [4e3, 6e3]])
+    slips = jnp.array([[0.2, 0.3], [0.1, -0.1]])  # the second environment brakes a wheel
+
+    def solve(load, slip):
+        return sj.solve_wheel(
+            wheel, snow, load, slip, slip_angle=jnp.full_like(slip, 0.05),
+            initial_entry_angle=jnp.full_like(slip, 0.5),
+        )  # fmt: skip
+
+    vmapped = jax.jit(jax.vmap(solve))(loads, slips)
+    flat = jax.jit(solve)(loads.reshape(-1), slips.reshape(-1))
+    alone = jax.jit(solve)(loads[0], slips[0])  # the driving environment: two panels
+    for name in ("entry_angle", "drawbar_pull", "torque", "lateral_force"):
+        v, f = getattr(vmapped, name).reshape(-1), getattr(flat, name)
+        np.testing.assert_allclose(v, f, rtol=1e-13, err_msg=name)
+    # the driving environment took the four-panel layout (within 1e-7 of the two-panel)
+    two_panel = alone.drawbar_pull
+    np.testing.assert_allclose(vmapped.drawbar_pull[0], two_panel, rtol=1e-7)
+    assert np.max(np.abs(vmapped.drawbar_pull[0] / two_panel - 1)) > 1e-13

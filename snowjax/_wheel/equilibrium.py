@@ -40,6 +40,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _is_traced
 from .._terrain.base import Terrain
+from .batchwide import _any_in_batch
 from .bracketed import solve_elementwise
 from .contact import _broadcast_leaves, _contact_batch, _layout, _with_rule_for
 from .front_rim import _contact_rule
@@ -213,7 +214,7 @@ def _solve_layout(
         # evaluated only where some element ended there).
         at_cap = s <= lower
         capacity = jax.lax.cond(
-            jnp.any(at_cap),
+            _any_in_batch(at_cap),
             lambda: vertical(_theta_from_s(lower, theta_cap)),
             lambda: jnp.full_like(load, jnp.inf),
         )
