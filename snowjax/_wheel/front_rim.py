@@ -575,11 +575,11 @@ class SteeredRimRule(FrontRimRule):
     """`FrontRimRule` at a slip angle (the rover in MJX, its main user).  Its
     warm-started solve compiles both layouts and takes the two-panel one where no
     element of the batch brakes, vmapped axes included (`batchwide._any_in_batch`:
-    vmapped over environments, a per-environment choice became a select that ran both:
-    the rover's four wheels at 1,024 environments, driven, took 8.2 us per wheel for
-    their equilibria with both layouts, 2.6 us with the two-panel one and the start's
-    capacity skipped; `benchmarks/mjx.py`'s snow forces went from 5.5x the MJX step to
-    2.2x).
+    vmapped over environments, a per-environment choice became a select that runs both,
+    so this rule had been compiled with the four-panel layout alone: the rover's four
+    wheels at 1,024 environments, driven, took 8.2 us per wheel for their equilibria
+    that way, 2.6 us with the two-panel layout and the start's capacity skipped;
+    `benchmarks/mjx.py`'s snow forces went from 5.5x the MJX step to 2.2x).
 
     The four-panel layout's two panels beside a braked wheel's split take at least
     `split_nodes` nodes: the slip angle rounds the kink there over a width that can be
