@@ -14,6 +14,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from .._terrain.base import _half_angle_arc
+
 __all__: list[str] = []
 
 
@@ -125,7 +127,7 @@ def _power_law_root(wheel, terrain, load, theta_cap, distribution, slip):
         return rest ** (n + 1) * (2 - rest * (n + 1) / (n + 2)) ** n / (n + 1)
 
     def entry(z):  # theta0 [rad] of the rim whose lowest point is z [m] deep
-        return 2 * jnp.arcsin(jnp.sqrt(jnp.clip(z / d, 0.0, 1.0)))
+        return _half_angle_arc(jnp.minimum(z / d, 1.0))
 
     def model(z):  # (W [N], n [-]) of the model at the lowest point's sinkage z [m]
         sigma, slope = jax.jvp(lambda z: terrain.pressure(z, b), (z,), (jnp.ones_like(z),))
