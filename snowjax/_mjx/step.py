@@ -442,7 +442,7 @@ def step(
     dt = m.opt.timestep
     mass = mjx.full_m(m, d) + dt * jnp.diag(m.dof_damping)
     mass = mass + dt * _snow_damping_matrix(m, d, wheels, damp, rows)
-    qacc = jnp.linalg.solve(mass, d.qfrc_smooth + d.qfrc_constraint)
+    qacc = _solve_dense(mass, d.qfrc_smooth + d.qfrc_constraint)
     explicit = m.replace(
         opt=m.opt.replace(disableflags=m.opt.disableflags | mjx.DisableBit.EULERDAMP)
     )
@@ -450,6 +450,38 @@ def step(
     if isinstance(ground, _MapGround):
         return d, out, ground.mark(plane, m.opt.timestep, out.depth)
     return d, out
+
+
+def _solve_dense(a: Float[Array, "n n"], b: Float[Array, " n"]) -> Float[Array, " n"]:
+    """x with a x = b, by Gaussian elimination with partial pivoting written in jnp
+    (unrolled over the n = nv rows: 16 on the rover), not `jnp.linalg.solve`.
+
+    Why not LAPACK: vmapped over environments, `jnp.linalg.solve` is jaxlib's batched
+    LU and triangular-solve kernels, which on the CPU split a large batch over XLA's
+    intra-op thread pool and block a pool thread until the pieces are done
+    (`ParallelBatchMap` in jaxlib's `lapack_kernels.cc`, jaxlib 0.10.2).  The mass
+    matrix is ready before MJX's constraint solver runs, so XLA may start its LU while
+    the solver's batched Cholesky runs on the other thread; with both of a 2-core
+    machine's pool threads blocked in such a wait, nothing runs the pieces and the step
+    deadlocks (seen in the test suite: the 1,024-environment episode at 0 % CPU, `gdb`
+    showing the two pool threads in `LuDecomposition` and `TriMatrixEquationSolver`).
+    Elimination in jnp has no such call; on n = 16 it costs about what the LAPACK
+    kernels did (`benchmarks/mjx.py`).
+    """
+    n = a.shape[-1]
+    m = jnp.concatenate([a, b[:, None]], axis=1)  # the augmented matrix, (n, n + 1)
+    rows = jnp.arange(n)
+    for k in range(n):
+        p = k + jnp.argmax(jnp.abs(m[k:, k]))  # the pivot row (k <= p < n)
+        at_p = (rows == p).astype(m.dtype)
+        row_p, row_k = at_p @ m, m[k]
+        # swap rows k and p (nothing where p == k)
+        m = m + jnp.outer((rows == k).astype(m.dtype) - at_p, row_p - row_k)
+        m = m.at[k + 1 :].add(-jnp.outer(m[k + 1 :, k] / m[k, k], m[k]))
+    x = jnp.zeros(n, m.dtype)
+    for k in reversed(range(n)):
+        x = x.at[k].set((m[k, n] - m[k, k + 1 : n] @ x[k + 1 :]) / m[k, k])
+    return x
 
 
 def _solver_unroll(solver_unroll) -> int | None:
