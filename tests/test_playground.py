@@ -83,6 +83,7 @@ def test_brax_wrapper_autoresets_and_vmaps_256_environments_without_nan():
     assert np.all(np.asarray(state.info["steps"]) == 4) and np.all(np.asarray(state.done) == 1)
 
 
+@pytest.mark.slow  # Brax PPO's own compiles (make test-slow)
 def test_ppo_on_a_tiny_budget_raises_the_mean_return():
     """Brax's PPO, through `wrap_for_brax_training`, on 16 environments for 6 iterations
     of short episodes (2 s, goals 4-6 m ahead): the deterministic policy's mean return

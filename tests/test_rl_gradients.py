@@ -9,6 +9,7 @@ compiling the rover's step with the snow's forces.
 
 import jax
 import jax.numpy as jnp
+import pytest
 
 from .extras import require_extra
 
@@ -21,6 +22,7 @@ from snowjax import mjx as smjx  # noqa: E402
 SNOW = sj.WongSnow.thesis_fresh_snow()
 
 
+@pytest.mark.slow  # grad through 100 MJX steps with snow: minutes to compile (make test-slow)
 def test_reverse_mode_gradient_of_a_100_step_rollout_matches_central_differences():
     """d(return)/d(policy parameters) and d(return)/d(p_w) by `jax.grad` through 25
     control steps of 4 MJX steps (100 MJX steps of 5 ms, snow forces on every wheel,

@@ -736,6 +736,7 @@ def test_the_closed_form_start_lies_within_one_percent_of_the_root():
         assert np.max(np.abs(error)) < 1e-2, np.max(np.abs(error))
 
 
+@pytest.mark.slow  # a solve compiled per case; every any-terrain test starts there (make test-slow)
 def test_the_power_law_start_and_its_secant_steps_find_the_root():
     """The any-terrain rule's cold start on a law that rises (`start._power_law_start`: the
     entry angle at which a power-law model of the law carries the load, no quadrature)
