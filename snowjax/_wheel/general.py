@@ -288,10 +288,16 @@ def general_contact(
     surface = jnp.zeros_like(theta0)
     k_surface = terrain.rim_properties(surface, type(wheel).contact_width(wheel, surface))[3]
     entry_scale = running.entry_scale(law, theta0, slip, wheel.diameter, terrain, k_surface)
-    layout = _mirrored_nodes if distribution.mirrors_rear else _direct_nodes
-    theta, weight, (sin, cos, at), stresses = layout(
-        contact, slip, terrain, distribution, law, n, braking, entry_scale
-    )
+    if distribution.mirrors_rear:
+        theta, weight, (sin, cos, at), stresses = _mirrored_nodes(
+            contact, slip, terrain, distribution, law, n, braking, entry_scale
+        )
+    else:
+        lateral_rate = running.lateral_rate(slip, wheel.diameter, k_surface)
+        spans = [(end, lateral_rate, k_surface) for end in contact.smooth_span(distribution)]
+        theta, weight, (sin, cos, at), stresses = _direct_nodes(
+            contact, slip, terrain, distribution, law, n, braking, entry_scale, spans
+        )
     sigma, cohesion, tan_phi, modulus = stresses
     nodes = ContactNodes(
         contact=contact,
@@ -323,16 +329,23 @@ def _contact_points(contact, theta):
     return sin, cos, contact.points(theta, sin, cos)
 
 
-def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale):
+def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale, spans=()):
     """(theta, weight, (sin theta, cos theta, `ContactPoints`), (sigma, c, tan phi, K)) at
     the nodes of panels cut at the contact's ends theta_r and theta0, the distribution's
     breakpoints, the contact's shape's breaks, a base's lowest point, a braked wheel's
     split and the angles where the contact reaches the terrain's breakpoints (and their
-    images in a rear region): the law evaluated at every node's stress angle."""
+    images in a rear region): the law evaluated at every node's stress angle.
+
+    `spans` (at most one (theta_s [rad], the running's `lateral_rate` [1/rad], K [m])):
+    the contact's `smooth_span`, [theta_r, theta_s], takes n nodes of its own
+    (`_smooth_span_nodes`) and the panels cover [theta_s, theta0]."""
     theta0 = contact.entry_angle
     inf = jnp.asarray(jnp.inf, theta0.dtype)
     theta_r = distribution.exit_angle(theta0, slip)
-    points = [(theta_r, inf), (theta0, entry_scale)]
+    start = theta_r
+    for end, *_ in spans:
+        start = jnp.clip(end, theta_r, theta0)
+    points = [(start, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
     points += [(angle, inf) for angle in contact.panel_ends(distribution, slip)]
     # A law with a base on the front region: the contact's lowest point (the rim's at
@@ -341,23 +354,70 @@ def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_s
     base_end = _front_base_end(distribution, terrain, contact)
     if base_end is not None:
         points.append((base_end + (theta0 - base_end) * BASE_PANEL, inf))
+    split = ()
     if braking and law.mobilises:
-        points.append(_braking_point(theta_r, slip, contact, terrain, distribution))
+        split = (_braking_point(theta_r, slip, contact, terrain, distribution),)
+        points += split
     for theta_f in _breakpoint_angles(contact, terrain):
         # Rim angle where the sinkage reaches a breakpoint of the terrain's law (front),
         # and its mirror image in the rear region.
         points.append((theta_f, inf))
         points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
-    angles, scales = _panel_ends(points, theta_r, theta0, entry_scale)
+    angles, scales = _panel_ends(points, start, theta0, entry_scale)
     log_end = None if base_end is None else angles[:-1] == base_end
     theta, weight = _graded_half_panels(
         angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
     )
+    for _, *rates in spans:
+        lead, lead_weight = _smooth_span_nodes(theta_r, start, slip, contact, law, n, split, rates)
+        theta = jnp.concatenate([lead, theta])
+        weight = jnp.concatenate([lead_weight, weight])
     geometry = _contact_points(contact, theta)
     # Normal stress: the terrain's law at the depth of the distribution's angle.
     theta_eff = distribution.stress_angle(theta, theta0, slip)
     stresses = _stresses_at(theta, theta_eff, contact, terrain, geometry[2].width)
     return theta, weight, geometry, stresses
+
+
+def _smooth_span_nodes(lo, hi, slip, contact, law, n, split, rates):
+    """Nodes and weights on a contact's `smooth_span` [lo, hi] (a tyre's flat): the normal
+    stress is constant and the geometry smooth there, so Gauss–Legendre needs no power
+    map at its ends, only the sinh map (`_sinh_offsets`) towards the layer where the
+    shear mobilises: at hi, the flat's front end, whose width is K / (r |dj/dtheta|) (j
+    grows as i x along the flat, `contact.shear_slope`) or, at a slip angle, the width
+    of the combined displacement's rise (`rates` = (the running's `lateral_rate`
+    [1/rad], K [m])); and a braked wheel's split on the span (`split`: the braking
+    panel end (angle, scale) in a one-tuple, empty in the driving layout), where the span
+    is cut in two pieces of n nodes, each clustered at the split.
+
+    Measured against the two half-panels of 2n nodes that the span took before: see the
+    performance guide (the tyre's rows).
+    """
+    lateral_rate, modulus = rates
+    r = contact.wheel.diameter / 2
+    if law.mobilises:
+        slope = contact.shear_slope(jax.lax.stop_gradient(hi), slip)
+        rate = jnp.hypot(r * slope / modulus, lateral_rate)
+        layer = jax.lax.stop_gradient(1 / jnp.maximum(rate, 1e-12 * r / modulus))
+    else:
+        layer = jnp.full_like(hi, jnp.inf)
+    t, w = _rule(n, hi.dtype)
+
+    def toward(a, b, scale):  # the span [a, b] clustered at b (a > b: at its lower end)
+        length = jnp.abs(b - a)
+        filled = length > 0
+        offset, jac = _sinh_offsets(t, w, jnp.where(filled, length, 1.0), scale, 1e-3)
+        x = jnp.where(filled, b - jnp.sign(b - a) * offset, b)
+        return x, jnp.where(filled, jac, 0.0)
+
+    if not split:
+        return toward(lo, hi, layer)
+    ((angle, scale),) = jax.lax.stop_gradient(split)
+    cut = jnp.clip(angle, lo, hi)
+    on_span = cut < hi
+    first = toward(lo, cut, jnp.where(on_span, scale, layer))
+    second = toward(hi, cut, scale)
+    return jnp.concatenate([first[0], second[0]]), jnp.concatenate([first[1], second[1]])
 
 
 def _mirrored_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale):

@@ -357,6 +357,17 @@ class AbstractContact(eqx.Module):
         """Angles [rad] where the contact's shape breaks (panel ends; none on a rim)."""
         return []
 
+    def smooth_span(self, distribution) -> tuple[Array, ...]:
+        """The angle [rad] up to which the contact, from its exit end (0 on the front
+        region), carries a constant normal stress on a straight piece (a tyre's flat), in
+        a one-tuple: every integrand is smooth there but for the shear's layers, so the
+        integrator covers it with one graded panel of its own (`general._direct_nodes`)
+        instead of the two half-panels graded for power-law ends.  Empty (static): no
+        such piece (a rim).  Asked only where the panels are cut in the contact angle
+        (not where a rear region mirrors the front, `mirrors_rear`)."""
+        del distribution
+        return ()
+
     def shear_sign_change(self, exit_angle, slip, rear: bool) -> tuple[Array, Array]:
         """(angle [rad], found): where a braked wheel's shear displacement changes sign in
         the contact exit_angle..theta0 (`rear` False: no rear arc, the front region)."""

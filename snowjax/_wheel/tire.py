@@ -419,16 +419,26 @@ class TreadContact(AbstractContact):
         return jnp.where(flat, tau * self.tread.cos_half_angle + sigma * sin, tau)
 
     def panel_ends(self, distribution, slip) -> list[Array]:
-        """The flat's ends (the normal's direction turns there; the rear end only where
-        the contact extends behind the axle) and, in a rear region, the angles whose
-        stress angle is the flat's front end (the sinkage's kink; not where the rear
-        mirrors the front, `mirrors_rear`: the integrator cuts its panels in the stress
-        angle there, where that image is the front end itself)."""
+        """Under a rear region, the flat's ends (the normal's direction turns there) and
+        the angles whose stress angle is the flat's front end (the sinkage's kink; not
+        where the rear mirrors the front, `mirrors_rear`: the integrator cuts its panels
+        in the stress angle there, where that image is the front end itself).  None on
+        the front region, where the flat is the contact's `smooth_span` and its front
+        end the first panel's start."""
         half, theta0 = self.tread.half_angle, self.entry_angle
-        ends = [half] if _is_front(distribution) else [half, -half]
+        if _is_front(distribution):
+            return []  # the flat's front end ends its `smooth_span`
+        ends = [half, -half]
         if distribution.mirrors_rear:
             return ends
         return ends + list(distribution.rear_angles(half, theta0, slip))
+
+    def smooth_span(self, distribution) -> tuple[Array, ...]:
+        """On the front region, the flat's front end theta_f (0 in the rigid mode): the
+        flat carries p_f, its normal is vertical and its length element dx, so only
+        the shear stress varies along it, with j linear in x.  Under a rear region,
+        none (`AbstractContact.smooth_span`)."""
+        return (self.tread.half_angle,) if _is_front(distribution) else ()
 
     def shear_sign_change(self, exit_angle, slip, rear: bool) -> tuple[Array, Array]:
         """j equals the rim's on the entry arc (theta >= theta_f); on the flat it is linear
