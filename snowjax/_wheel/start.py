@@ -228,9 +228,9 @@ def _power_law_start(theta_cap, load, slip, wheel, terrain, distribution):
     (Bekker's snow / 9, Reece's sand / 4), slips -0.3 to 0.9, front region and
     Wong–Reece: the secant steps reach |ln(W / F_z)| < 1e-10 in 3-7 evaluations of W
     (Reece's sand with Wong–Reece 3, 5 without the rear factor; Bekker's snow 4; Wong
-    snow with Wong–Reece 5; the 100 kPa tyre on Wong snow 6-7), where the start this
-    replaced took four (W at two entry angles, two secant steps) and Newton two more
-    with tangents."""
+    snow with Wong–Reece 5; the 100 kPa tyre on Wong snow 4-7, on Reece's sand 3-4),
+    where the start this replaced took four (W at two entry angles, two secant steps)
+    and Newton two more with tangents."""
     theta, exponent = _power_law_root(wheel, terrain, load, theta_cap, distribution, slip)
     s0 = _s_of_theta(theta, theta_cap)
     lower = jnp.full_like(load, _s_min(load.dtype))
