@@ -293,10 +293,10 @@ def general_contact(
             contact, slip, terrain, distribution, law, n, braking, entry_scale
         )
     else:
-        lateral_rate = running.lateral_rate(slip, wheel.diameter, k_surface)
-        spans = [(end, lateral_rate, k_surface) for end in contact.smooth_span(distribution)]
+        spans = contact.smooth_span(distribution)
+        rates = (running.lateral_rate(slip, wheel.diameter, k_surface), k_surface)
         theta, weight, (sin, cos, at), stresses = _direct_nodes(
-            contact, slip, terrain, distribution, law, n, braking, entry_scale, spans
+            contact, slip, terrain, distribution, law, n, braking, entry_scale, spans, rates
         )
     sigma, cohesion, tan_phi, modulus = stresses
     nodes = ContactNodes(
@@ -329,21 +329,24 @@ def _contact_points(contact, theta):
     return sin, cos, contact.points(theta, sin, cos)
 
 
-def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_scale, spans=()):
+def _direct_nodes(
+    contact, slip, terrain, distribution, law, n, braking, entry_scale, spans=(), rates=()
+):
     """(theta, weight, (sin theta, cos theta, `ContactPoints`), (sigma, c, tan phi, K)) at
     the nodes of panels cut at the contact's ends theta_r and theta0, the distribution's
     breakpoints, the contact's shape's breaks, a base's lowest point, a braked wheel's
     split and the angles where the contact reaches the terrain's breakpoints (and their
     images in a rear region): the law evaluated at every node's stress angle.
 
-    `spans` (at most one (theta_s [rad], the running's `lateral_rate` [1/rad], K [m])):
-    the contact's `smooth_span`, [theta_r, theta_s], takes n nodes of its own
-    (`_smooth_span_nodes`) and the panels cover [theta_s, theta0]."""
+    `spans` (the contact's `smooth_span`: at most one angle theta_s [rad]): [theta_r,
+    theta_s] takes n nodes of its own (`_smooth_span_nodes`, its layer's width from
+    `rates` = (the running's `lateral_rate` [1/rad], K [m])) and the panels cover
+    [theta_s, theta0]."""
     theta0 = contact.entry_angle
     inf = jnp.asarray(jnp.inf, theta0.dtype)
     theta_r = distribution.exit_angle(theta0, slip)
     start = theta_r
-    for end, *_ in spans:
+    for end in spans:
         start = jnp.clip(end, theta_r, theta0)
     points = [(start, inf), (theta0, entry_scale)]
     points += [(angle, inf) for angle in distribution.breakpoints(theta0, slip)]
@@ -368,7 +371,7 @@ def _direct_nodes(contact, slip, terrain, distribution, law, n, braking, entry_s
     theta, weight = _graded_half_panels(
         angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
     )
-    for _, *rates in spans:
+    for _ in spans:
         lead, lead_weight = _smooth_span_nodes(theta_r, start, slip, contact, law, n, split, rates)
         theta = jnp.concatenate([lead, theta])
         weight = jnp.concatenate([lead_weight, weight])
