@@ -368,3 +368,25 @@ def test_the_flat_is_one_panel_graded_at_its_shear_layer():
             expected = (w, r, t, m / (D / 2))
             for value, reference in zip(got, expected):
                 assert abs(value[k] - reference) <= 1e-9 * w, (th[k], sl[k], value[k], reference)
+
+
+def test_the_tyres_start_models_its_flat():
+    """The any-terrain cold start of a tyre whose tread flattens takes one Newton step on
+    a power-law model of its own contact (the flat at p_f and the curved part beyond it,
+    `start._power_law_root`): the 100 kPa tyre on Reece's sand, 1-9 kN / 4, slips 0-0.9,
+    starts within 5 % of the root (measured 2.8 % on these 64 cases, 2.9 % on 2,000;
+    the rim's model alone: 27 % on either)."""
+    from snowjax._wheel.equilibrium import _entry_angle_cap
+    from snowjax._wheel.start import _power_law_root
+
+    reece = sj.ReeceSoil(0.8, 10.0, 800.0, 15e3, 1e3, 0.6, shear_modulus=0.02)
+    tire = sj.DeflectingTire(D, B, H, 100e3)
+    rng = np.random.default_rng(8)
+    load, slip = rng.uniform(1e3, 9e3, 64) / 4, rng.uniform(0.0, 0.9, 64)
+    root = sj.solve_wheel(tire, reece, load, slip)
+    assert np.all(np.asarray(root.status) == sj.Status.CONVERGED)
+    cap = _entry_angle_cap(tire.deepest_reach(reece), tire.diameter)[0]
+    front = sj.FrontRegion()
+    start = jax.vmap(lambda w, i: _power_law_root(tire, reece, w, cap, front, i)[0])
+    error = np.asarray(start(jnp.asarray(load), jnp.asarray(slip))) / root.entry_angle - 1
+    assert np.max(np.abs(error)) < 0.05, np.max(np.abs(error))

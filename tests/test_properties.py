@@ -301,14 +301,18 @@ def _tire_and_rut_solve(wheel, tires, terrain, distribution, load, slip, ruts):
 @pytest.mark.parametrize(("kind", "dtype"), _tiers({("wong", jnp.float32)}))
 @settings(max_examples=2, deadline=None, derandomize=True, phases=NO_SHRINK)
 @given(cases=TIRE_BATCHES)
-def test_tyres_and_ruts_never_nan_and_a_stiff_tyre_is_the_rim(cases, kind, dtype):
+def test_tyres_and_ruts_never_nan_and_a_stiff_tyre_is_the_rim(
+    cases, kind, dtype, optimised_compile
+):
     """Soft tyres (with flexing) and stiff ones, ruts of zero depth, mid-depth and at the
     base, driving and braking, the bottomed-out corner: every element converged or
     flagged, no inf/NaN (`random_cases.tire_and_rut_inputs`); and a 1e9 Pa tyre is the
     rim on every law and both distributions, its status and every field within 1e-6
-    (float32: 1e-3)."""
+    (float32: 1e-3).  Float32 compiles with XLA's optimisations (`conftest.py`'s
+    `optimised_compile`: the suite's switches miscompiled a float32 case at the cap)."""
     inputs = _tires_and_ruts(kind, cases, dtype)
-    states = _tire_and_rut_solve(*inputs)
+    with optimised_compile(dtype == jnp.float32):
+        states = _tire_and_rut_solve(*inputs)
     for label, state in states.items():
         _check_state(state, dtype, (kind, label))
     stiff = slice(BATCH // 2, None)

@@ -66,7 +66,7 @@ class AbstractWheel(eqx.Module):
     width: AbstractVar[Float[Array, "..."]]
 
     #: Whether the wheel's tread can flatten (its deflection's parameters are fitted by
-    #: `fit_wheel`).
+    #: `fit_wheel`; the any-terrain cold start models its contact, flat included).
     deflects: ClassVar[bool] = False
     #: Prefix used in error messages ("wheel.width must be ...").
     label: ClassVar[str] = "wheel"
