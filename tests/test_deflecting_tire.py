@@ -390,3 +390,84 @@ def test_the_tyres_start_models_its_flat():
     start = jax.vmap(lambda w, i: _power_law_root(tire, reece, w, cap, front, i)[0])
     error = np.asarray(start(jnp.asarray(load), jnp.asarray(slip))) / root.entry_angle - 1
     assert np.max(np.abs(error)) < 0.05, np.max(np.abs(error))
+
+
+ROUND_FIELDS = ("entry_angle", "sinkage", "motion_resistance", "thrust", "torque")
+
+
+def _round_cases(n=24, seed=3):
+    rng = np.random.default_rng(seed)
+    return rng.uniform(1e3, 9e3, n) / 9, rng.uniform(-0.3, 0.9, n)
+
+
+def test_a_batch_of_round_treads_is_solved_as_its_rim():
+    """Where every tread of a batch stays round at its root (`stays_round`: deflection
+    <= 1e-12 of the sinkage), `solve_wheel` solves the batch with the tyre's rim
+    (`equilibrium._round_first`): the 100 kPa tyre on Bekker's snow, driven and braked,
+    gives the rim's outputs and, in a batch whose first tyre (2 kPa) flattens, so that
+    the batch takes the tyre's own contact, the same outputs within 1e-12 of the load
+    (measured 7e-16) and the same gradients w.r.t. the load and k_phi within 1e-9."""
+    from snowjax._wheel.contact import _STRAIGHT as straight
+    from snowjax._wheel.equilibrium import _solves_as_rim
+    from snowjax._wheel.front_rim import _contact_rule
+
+    bekker, wong = sj.BekkerSoil.snow_us(), sj.WongSnow.thesis_fresh_snow()
+    load, slip = _round_cases()
+    pressure = np.full(load.shape, 100e3)
+    tyre = sj.DeflectingTire(D, B, H, pressure)
+    rule = type(_contact_rule(bekker, sj.FrontRegion(), tyre, straight))
+    assert _solves_as_rim(tyre, bekker, sj.FrontRegion(), straight, rule)
+    rule = type(_contact_rule(wong, sj.FrontRegion(), tyre, straight))
+    assert not _solves_as_rim(tyre, wong, sj.FrontRegion(), straight, rule)  # a base
+
+    round_ = sj.solve_wheel(tyre, bekker, load, slip)
+    assert np.all(np.asarray(tyre.stays_round(round_.entry_angle, bekker)))
+    rim = sj.solve_wheel(sj.RigidWheel(D, B), bekker, load, slip)
+    soft = pressure.copy()
+    soft[0] = 2e3
+    mixed_tyre = sj.DeflectingTire(D, B, H, soft)
+    mixed = sj.solve_wheel(mixed_tyre, bekker, load, slip)
+    assert not bool(mixed_tyre.stays_round(mixed.entry_angle, bekker)[0])
+    for name in ROUND_FIELDS:
+        got = np.asarray(getattr(round_, name))
+        np.testing.assert_allclose(got, np.asarray(getattr(rim, name)), rtol=1e-12, atol=0)
+        error = np.abs(got - np.asarray(getattr(mixed, name)))[1:] / load[1:]
+        assert np.max(error) <= 1e-12, (name, np.max(error))
+    np.testing.assert_array_equal(round_.status[1:], mixed.status[1:])
+
+    def total(load, k_phi, wheel):
+        soil = eqx.tree_at(lambda s: s.k_phi, bekker, k_phi)
+        state = sj.solve_wheel(wheel, soil, load, slip)
+        return jnp.sum(state.motion_resistance[1:] + state.entry_angle[1:])
+
+    grad = jax.grad(total, argnums=(0, 1))
+    g_round = grad(jnp.asarray(load), bekker.k_phi, tyre)
+    g_mixed = grad(jnp.asarray(load), bekker.k_phi, mixed_tyre)
+    np.testing.assert_allclose(g_round[0][1:], g_mixed[0][1:], rtol=1e-9, atol=0)
+    np.testing.assert_allclose(g_round[1], g_mixed[1], rtol=1e-9, atol=0)
+    assert np.all(np.asarray(g_round[0][1:]) != 0)
+
+
+def test_a_tread_that_flattens_after_the_start_falls_back_to_the_tyre(monkeypatch):
+    """`_round_first` tries the rim where the start says every tread stays round, and
+    keeps its roots only where they do: with the start's margin shrunk to 1 % of the
+    sinkage, soft tyres (2 kPa on Bekker's snow; most treads flatten at their roots)
+    are tried as the rim and still solved as tyres (their outputs those of the default,
+    which does not try the rim; a rim's motion resistance differs by more than 10 %)."""
+    import snowjax._wheel.equilibrium as equilibrium
+
+    bekker = sj.BekkerSoil.snow_us()
+    load, slip = _round_cases(n=20, seed=4)
+    tyre = sj.DeflectingTire(D, B, H, 2e3)
+    expected = sj.solve_wheel(tyre, bekker, load, slip)
+    flat = ~np.asarray(tyre.stays_round(expected.entry_angle, bekker))
+    assert np.sum(flat[:-1]) >= 10, flat
+    rim = sj.solve_wheel(sj.RigidWheel(D, B), bekker, load, slip)
+    assert np.max(np.abs(rim.motion_resistance / expected.motion_resistance - 1)) > 0.1
+    monkeypatch.setattr(equilibrium, "ROUND_MARGIN", 0.01)
+    # (a new shape: the solve is traced again with the margin)
+    got = sj.solve_wheel(tyre, bekker, load[:-1], slip[:-1])
+    for name in ROUND_FIELDS:
+        np.testing.assert_allclose(
+            np.asarray(getattr(got, name)), np.asarray(getattr(expected, name))[:-1], rtol=1e-12
+        )

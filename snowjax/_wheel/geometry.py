@@ -99,6 +99,20 @@ class AbstractWheel(eqx.Module):
         del terrain
         return ()
 
+    def round_rim(self) -> "AbstractWheel":
+        """The rim whose contact this wheel's is while its tread stays round
+        (`stays_round`): the wheel itself for a rim (the default); a `DeflectingTire`'s
+        `RigidWheel` of its diameter and width.  Where every element of a batch stays
+        round at its root, `solve_wheel` solves with this rim instead (its contact
+        takes fewer nodes)."""
+        return self
+
+    def stays_round(self, entry_angle, terrain) -> Array:
+        """Whether the contact at entry angle theta0 [rad] is `round_rim`'s within the
+        solver's accuracy (boolean, per element): always for a rim."""
+        del terrain
+        return jnp.ones_like(entry_angle, dtype=bool)
+
     def constraints(self) -> list[tuple[str, Array, Array, str]]:
         """Validity of each parameter: (field path, value, ok mask, allowed range)."""
         return [

@@ -125,7 +125,8 @@ def _power_law_root(wheel, terrain, load, theta_cap, distribution, slip):
     0-0.9, 2,000 random cases: the start within 0.6 % of the root (median; at most 2.9
     %) on Reece's sand, against 6.2 % (27 %) with the rim's model; 4.7 % (14 %) against
     5.1 % (14 %) on Wong snow, whose log law near the flat is no power; on Bekker's
-    snow, where these tyres stay nearly rigid, 3.2 % (5 %) either way.
+    snow (1-9 kN / 9), where these tyres do not flatten (their switch to the elastic
+    mode lies beyond the cap), 3.2 % (5 %) either way.
 
     Per element, without the contact quadrature: the start of `BracketedSecant`
     (`_power_law_start`), whose steps correct the model's misfit (shear, the law's

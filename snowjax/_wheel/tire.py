@@ -100,6 +100,7 @@ from .geometry import (
     AbstractContact,
     AbstractWheel,
     ContactPoints,
+    RigidWheel,
     Tread,
     _rim_sinkage_between,
     _shear_displacement,
@@ -124,6 +125,11 @@ _LINEAR_DEFLECTION = 1e-8
 # delta_0 / D: below this deflection the flexing resistance's sqrt(delta) turns linear
 # (module docstring).
 _DELTA_0 = 1e-9
+
+# delta / s at or below which the tread counts as round (`DeflectingTire.stays_round`):
+# the flat's pressure is then the rim's within ~1e-12 (relative) and the flexing
+# resistance below ~1e-9 of the load (l ~ 2 delta / sqrt(delta_0 D)).
+ROUND_DEFLECTION = 1e-12
 
 
 class DeflectingTire(AbstractWheel):
@@ -218,6 +224,17 @@ class DeflectingTire(AbstractWheel):
         m = self.sharpness
         x = log_capacity - log_rim
         return jnp.exp(log_capacity - jax.nn.softplus(m * x) / m), jax.nn.softplus(-m * x) / m
+
+    def round_rim(self) -> RigidWheel:
+        """`RigidWheel(diameter, width)`: the tyre while its tread stays round."""
+        return RigidWheel(self.diameter, self.width)
+
+    def stays_round(self, entry_angle, terrain) -> Array:
+        """Whether the deflection at entry angle theta0 [rad] is at most
+        `ROUND_DEFLECTION` (1e-12) of the rim's sinkage: the ground presses far less
+        than p_i + p_c, the tyre is its `round_rim` within the solver's accuracy."""
+        sinkage = max_sinkage(entry_angle, self.diameter)
+        return self.deflection(entry_angle, terrain) <= ROUND_DEFLECTION * sinkage
 
     def deflection(self, entry_angle: Float[ArrayLike, "..."], terrain) -> Float[Array, "..."]:
         """delta = s - z_f [m]: how far the flat lies above the undeflected circle's
