@@ -459,8 +459,10 @@ def main(argv=None):
             SNOW, wong_reece, 1, beta, bulldozing,
         )  # fmt: skip
         # The deflecting tyre (the thesis tyre's size, section height 0.176 m, 100 kPa:
-        # both modes over these loads), against the rigid rows of the same terrain and
-        # distribution.
+        # both modes over these loads on Wong snow and Reece's sand; on Bekker's snow it
+        # stays round, its switch to the elastic mode beyond the cap, and the solver
+        # takes it as its rim), against the rigid rows of the same terrain and
+        # distribution; the notes give the share of treads flattened at the root.
         tires = {
             "WongSnow, front region": (SNOW, None, 1),
             "WongSnow + Wong-Reece": (SNOW, wong_reece, 1),
@@ -500,10 +502,15 @@ def main(argv=None):
                 st.entry_angle.block_until_ready()
                 return st
 
-            codes, counts = np.unique(np.asarray(run().status), return_counts=True)
+            state = run()
+            codes, counts = np.unique(np.asarray(state.status), return_counts=True)
             statuses = ", ".join(
                 f"{sj.Status(int(c)).name} {k / n_ref:.2f}" for c, k in zip(codes, counts)
             )
+            if name in rigid_rows:  # the share of treads that flatten at the root
+                flat = 1 - np.mean(np.asarray(wheel.stays_round(state.entry_angle, terrain)))
+                statuses += f"; treads flattened {flat:.2f}"
+
             t = best_time(run, 2)
             numbers[f"throughput_{name}"] = n_ref / t
             add(

@@ -425,7 +425,9 @@ def solve_wheel(
       width, section_height [m], inflation_pressure, carcass_pressure [Pa])`, a tyre
       whose tread flattens where the ground would press harder than it can carry
       (every terrain, distribution and slip angle; not `shear="simplified"`); then
-      `sinkage` is that of its flat.
+      `sinkage` is that of its flat.  On a law without a base whose pressure rises, a
+      batch whose every tread stays round at its root (`stays_round`) is solved as the
+      tyre's `round_rim`, whose outputs agree within rounding.
     - `terrain`: any `snowjax.Terrain`: `WongSnow(p_w [Pa], z_w [m], cohesion [Pa],
       tan_phi [-], shear_modulus [m])`, `BekkerSoil(n [-], k_c [N/m^(n+1)],
       k_phi [N/m^(n+2)], cohesion [Pa], tan_phi [-], shear_modulus=[m])`,
