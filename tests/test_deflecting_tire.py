@@ -405,9 +405,9 @@ def test_a_batch_of_round_treads_is_solved_as_its_rim():
     <= 1e-12 of the sinkage), `solve_wheel` solves the batch with the tyre's rim
     (`equilibrium._round_first`): the 100 kPa tyre on Bekker's snow (with a flexing
     resistance, f_h 0.03), driven and braked, gives the rim's outputs and, in a batch
-    whose first tyre (2 kPa) flattens, so that
-    the batch takes the tyre's own contact, the same outputs within 1e-12 of the load
-    (measured 6e-16) and the same gradients w.r.t. the load and k_phi within 1e-9."""
+    whose first tyre (2 kPa) flattens, so that the batch takes the tyre's own contact,
+    the same outputs within 1e-12 of the load (measured 6e-16) and the same gradients
+    w.r.t. the load and k_phi within 1e-9."""
     from snowjax._wheel.contact import _STRAIGHT as straight
     from snowjax._wheel.equilibrium import _solves_as_rim
     from snowjax._wheel.front_rim import _contact_rule
@@ -453,8 +453,9 @@ def test_a_tread_that_flattens_after_the_start_falls_back_to_the_tyre(monkeypatc
     """`_round_first` tries the rim where the start says every tread stays round, and
     keeps its roots only where they do: with the start's margin shrunk to 1 % of the
     sinkage, soft tyres (2 kPa on Bekker's snow; most treads flatten at their roots)
-    are tried as the rim and still solved as tyres (their outputs those of the default,
-    which does not try the rim; a rim's motion resistance differs by more than 10 %)."""
+    are tried as the rim and still solved as tyres (their outputs those at the default
+    margin; a rim's motion resistance differs by more than 10 %, and without the check
+    of the roots this test failed by 50 %)."""
     import snowjax._wheel.equilibrium as equilibrium
 
     bekker = sj.BekkerSoil.snow_us()
