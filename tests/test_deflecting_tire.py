@@ -417,9 +417,9 @@ def test_a_batch_of_round_treads_is_solved_as_its_rim():
     pressure = np.full(load.shape, 100e3)
     tyre = sj.DeflectingTire(D, B, H, pressure, hard_surface_resistance=0.03)
     rule = type(_contact_rule(bekker, sj.FrontRegion(), tyre, straight))
-    assert _solves_as_rim(tyre, bekker, sj.FrontRegion(), straight, rule)
+    assert _solves_as_rim(tyre, tyre.round_rim(), bekker, sj.FrontRegion(), straight, rule)
     rule = type(_contact_rule(wong, sj.FrontRegion(), tyre, straight))
-    assert not _solves_as_rim(tyre, wong, sj.FrontRegion(), straight, rule)  # a base
+    assert not _solves_as_rim(tyre, tyre.round_rim(), wong, sj.FrontRegion(), straight, rule)
 
     round_ = sj.solve_wheel(tyre, bekker, load, slip)
     assert np.all(np.asarray(tyre.stays_round(round_.entry_angle, bekker)))

@@ -282,18 +282,14 @@ def _in_chunks(fn, args, size):
     return jax.tree_util.tree_map(lambda x: x.reshape(-1)[:size], out)
 
 
-def _solves_as_rim(wheel, terrain, distribution, running, rule_type) -> bool:
-    """Whether a batch of `wheel` may be solved with its `round_rim` where every tread
-    stays round (static): only a wheel with a rim of its own (a `DeflectingTire`), on a
-    law without a base whose pressure rises, where the rim's cap on the entry angle is
-    the wheel's, and where the rim takes the same contact rule (the same nodes and
-    options)."""
-    kind = type(wheel)
-    if kind.round_rim is AbstractWheel.round_rim:
+def _solves_as_rim(wheel, rim, terrain, distribution, running, rule_type) -> bool:
+    """Whether a batch of `wheel` may be solved with `rim`, its `round_rim`, where every
+    tread stays round (static): only a wheel with a rim other than itself (a
+    `DeflectingTire`), on a law without a base whose pressure rises, where the rim's cap
+    on the entry angle is the wheel's, and where the rim takes the same contact rule
+    (the same nodes and options)."""
+    if rim is wheel or terrain.has_base() or not terrain.pressure_rises():
         return False
-    if terrain.has_base() or not terrain.pressure_rises():
-        return False
-    rim = kind.round_rim(wheel)
     return type(_contact_rule(terrain, distribution, rim, running)) is rule_type
 
 
@@ -325,13 +321,9 @@ def _round_first(ops, rim, solve):
     deeper = jnp.minimum(_half_angle_arc(jnp.minimum(depth, 1.0)), theta_cap)
     stopped = jax.lax.stop_gradient((wheel, terrain))
     likely = _all_in_batch(kind.stays_round(stopped[0], deeper, stopped[1]))
-    rim_ops = (rim, *ops[1:])
-    shapes = jax.eval_shape(solve, rim_ops)
-    rim_out = jax.lax.cond(
-        likely,
-        lambda: solve(rim_ops),
-        lambda: jax.tree_util.tree_map(lambda x: jnp.zeros(x.shape, x.dtype), shapes),
-    )
+    # Not tried: `_solve_layout`'s outputs (theta0, R, T, M, F_y, M_z, status) as zeros.
+    untried = (*(jnp.zeros_like(load) for _ in range(6)), jnp.zeros(load.shape, jnp.int32))
+    rim_out = jax.lax.cond(likely, lambda: solve((rim, *ops[1:])), lambda: untried)
     root = jax.lax.stop_gradient(rim_out[0])
     rounded = likely & _all_in_batch(kind.stays_round(stopped[0], root, stopped[1]))
     return jax.lax.cond(rounded, lambda: rim_out, lambda: solve(ops))
@@ -369,8 +361,9 @@ def _solve_jit(wheel, terrain, distribution, terms, load, slip, guess, running, 
         return _with_rule_for(ops[4], shear, layout_solve, layout)
 
     def solve(ops):
-        if _solves_as_rim(ops[0], ops[1], ops[2], ops[6], rule_type):
-            return _round_first(ops, type(ops[0]).round_rim(ops[0]), solve_with)
+        rim = type(ops[0]).round_rim(ops[0])
+        if _solves_as_rim(ops[0], rim, ops[1], ops[2], ops[6], rule_type):
+            return _round_first(ops, rim, solve_with)
         return solve_with(ops)
 
     theta0, r, t, m, fy, mz, status = _in_chunks(
