@@ -473,3 +473,32 @@ def test_a_tread_that_flattens_after_the_start_falls_back_to_the_tyre(monkeypatc
         np.testing.assert_allclose(
             np.asarray(getattr(got, name)), np.asarray(getattr(expected, name))[:-1], rtol=1e-12
         )
+
+
+def test_round_treads_never_evaluate_the_tyres_contact(monkeypatch):
+    """The batch of round treads (`test_a_batch_of_round_treads_is_solved_as_its_rim`)
+    runs the rim's contact only: a callback in `DeflectingTire.contact` fires in none of
+    its evaluations (the `lax.cond`s trace both branches and run one), and does fire
+    once a flattening tyre joins the batch."""
+    calls = []
+    contact = sj.DeflectingTire.contact
+
+    def counted(self, entry_angle, terrain):
+        jax.debug.callback(lambda: calls.append(1))
+        return contact(self, entry_angle, terrain)
+
+    monkeypatch.setattr(sj.DeflectingTire, "contact", counted)
+    bekker = sj.BekkerSoil.snow_us()
+    load, slip = _round_cases(n=22, seed=5)  # (a shape of its own: traced with the callback)
+    pressure = np.full(load.shape, 100e3)
+    sj.solve_wheel(
+        sj.DeflectingTire(D, B, H, pressure), bekker, load, slip
+    ).status.block_until_ready()
+    jax.effects_barrier()
+    assert not calls
+    pressure[0] = 2e3
+    sj.solve_wheel(
+        sj.DeflectingTire(D, B, H, pressure), bekker, load, slip
+    ).status.block_until_ready()
+    jax.effects_barrier()
+    assert calls
