@@ -56,7 +56,10 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     """Rows: the same load on the rut, 1.5 times the load on it, the same load on a rut
     of zero depth.  Entry angle, motion resistance, drawbar pull and torque within 1e-7 of
     quad + brentq on the rut's law; the zero-depth rut equals the virgin terrain within
-    1e-12 (measured: 1e-15 relative)."""
+    1e-12 (measured: 1e-15 relative) where both take the same quadrature, and within the
+    quadrature's 1e-7 on Bekker's front region, where the driven virgin rim is one panel
+    graded towards its entry and the rut's is cut at its kink (measured 6.1e-9 of theta0,
+    2.6e-8 of the load)."""
     virgin, wr, load = CASES[case]
     dist = None if wr is None else sj.WongReece(*wr)
     first = sj.solve_wheel(WHEEL, sj.ContactModel(virgin, dist), load, SLIP)
@@ -66,8 +69,16 @@ def test_second_wheel_matches_scipy_and_a_rut_of_zero_depth_is_the_virgin_terrai
     rut = sj.Rut(virgin, depths, WHEEL.width, K_0, A_U)
     st = sj.solve_wheel(WHEEL, sj.ContactModel(rut, dist), loads, SLIP)
     assert np.all(np.asarray(st.status) == sj.Status.CONVERGED)
+    # The quadrature's tolerance: 1e-7 of theta0 and z0, of the load, of load x r.
+    scale = dict(motion_resistance=load, drawbar_pull=load, torque=load * WHEEL.diameter / 2)
+    same_rule = case != "bekker-front"
     for field in ("entry_angle", "sinkage", "motion_resistance", "drawbar_pull", "torque"):
-        np.testing.assert_allclose(getattr(st, field)[2], getattr(first, field), rtol=1e-12)
+        got, virgin_value = getattr(st, field)[2], getattr(first, field)
+        if same_rule:
+            np.testing.assert_allclose(got, virgin_value, rtol=1e-12)
+        else:
+            tol = 1e-7 * scale.get(field, abs(float(virgin_value)))
+            np.testing.assert_allclose(got, virgin_value, rtol=0, atol=tol)
     c, tan_phi, k = (float(x) for x in (virgin.cohesion, virgin.tan_phi, virgin.shear_modulus))
     law, d, floor = _rut_law(_law(virgin), z_u, float(WHEEL.width))
     np.testing.assert_allclose(rut.floor_depth[0], floor, rtol=1e-12)

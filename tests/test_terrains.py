@@ -133,6 +133,27 @@ def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
     assert np.allclose(f.drawbar_pull, f.thrust - f.motion_resistance)
 
 
+@pytest.mark.parametrize("kind,wong_reece", [(k, wr) for k in ("bekker", "reece") for wr in (0, 1)])
+def test_driven_rims_one_graded_panel_match_adaptive_quadrature(kind, wong_reece):
+    """A batch of driven rims on a law without a base or breakpoints is one panel graded
+    towards the entry (`general._graded_panel`; the random cases above brake, so their
+    batches take the braking layout): W, R, T, M within 1e-7 of quad, as above."""
+    cases = random_cases(kind, 12, seed=7 + wong_reece)
+    for c in cases:
+        c["slip"] = abs(c["slip"])
+    wheel, terrain, dist, stack = batch(kind, cases, wong_reece)
+    f = sj.contact_forces(wheel, sj.ContactModel(terrain, dist), stack("th"), stack("slip"))
+    got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
+    for k, c in enumerate(cases):
+        law, _ = law_of(kind, c)
+        exp = ref.contact(
+            c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"],
+            *fractions(c, wong_reece),
+        )  # fmt: skip
+        scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
+        assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_per_point_stresses_on_every_terrain_and_distribution(kind):
     """`normal_stress` / `shear_stress` at rim angles across the contact (front and, with
