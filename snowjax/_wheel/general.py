@@ -108,14 +108,16 @@ def _graded_panel(lo, hi, scale_hi, n, dtype):
     `_graded_half_panels` would put n nodes in each half and grade the lower half
     towards lo.
 
-    Where: the front region of a rim on a law without a base (lo the axle, where the
-    rim is deepest and the law smooth) and the Wong–Reece stress angle's [theta_m,
-    theta0] there (both regions' integrands are smooth at theta_m), driving, without
-    breakpoints.  Measured against 60 nodes per half-panel on 400 random driven cases
-    per law (Bekker's, Reece's; straight and at a slip angle; `tests/random_cases.py`):
-    every output within 1.6e-8 of the load (the half-panels' 24 nodes: 1.2e-6 on
-    Bekker's front region, where the lower half's nodes were spent at the axle and the
-    power-law entry got 12).
+    Where: driving, on a law without a base or breakpoints, the front region of a rim
+    (lo the axle, where the rim is deepest and the law smooth) or of a tyre beyond its
+    flat (lo the flat's front end, the arc's deepest point), and the Wong–Reece stress
+    angle's [theta_m, theta0] of a rim (both regions' integrands are smooth at
+    theta_m).  Measured against 60 nodes per half-panel on 400 random driven cases per
+    law (Bekker's, Reece's; `tests/random_cases.py`): rims, straight and at a slip
+    angle, within 1.6e-8 of the load (the half-panels' 24 nodes: 1.2e-6 on Bekker's
+    front region, where the lower half's nodes were spent at the smooth end and the
+    power-law entry got 12); tyres on the front region, half of them soft, within
+    1.1e-8 (the half-panels: 1.5e-6).
     """
     u, du = _power_map(*_rule(_single_panel_nodes(n), dtype), GRADING_POWER)
     length = hi - lo
@@ -396,8 +398,9 @@ def _direct_nodes(
         # and its mirror image in the rear region.
         points.append((theta_f, inf))
         points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
-    if len(points) == 2 and not spans and not terrain.has_base():
-        # One panel from the axle, where the law is smooth: graded towards the entry alone.
+    if len(points) == 2 and not terrain.has_base():
+        # One panel from the axle (a tyre's: the flat's front end), where the law is
+        # smooth: graded towards the entry alone.
         theta, weight = _graded_panel(start, theta0, entry_scale, n, theta0.dtype)
     else:
         angles, scales = _panel_ends(points, start, theta0, entry_scale)
