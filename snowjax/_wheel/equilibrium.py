@@ -442,10 +442,9 @@ def solve_wheel(
         without a distribution: two panels when all slips are >= 0, four with braking;
         defaults classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified
         24 + 24 and 4 x 16, none 8 + 8.  Other terrains / Wong–Reece: 12 nodes per
-        half-panel, 16 when the batch brakes; on a law without a base the panel from
-        the contact's deepest point is graded towards its other end alone, with
-        ceil(5 n / 3) nodes for n per half-panel (20 and 27 by default; a driven rim
-        on a law without breakpoints is that one panel).  With the defaults every contact integral
+        half-panel, 16 when the batch brakes; a driven rim on a law without a base or
+        breakpoints is one panel graded towards its entry, of ceil(5 n / 3) nodes for
+        n per half-panel (20 by default).  With the defaults every contact integral
         is within 1e-7 (relative) of adaptive quadrature over the documented range.  An
         integer sets all.
       - `accuracy`: `"reference"` (the defaults above) or `"simulator"` (6 nodes per

@@ -96,29 +96,28 @@ def _sinh_offsets(u, du, length, scale, min_ratio):
 
 
 def _single_panel_nodes(n: int) -> int:
-    """Nodes of a panel graded towards one end only (`_graded_panel`), for n per
-    half-panel of the general rule: ceil(5 n / 3) (20 for 12, 27 for 16, 14 for 8)."""
+    """Nodes of a contact that is one panel whose lower end is smooth (`_graded_panel`),
+    for n per half-panel of the general rule: ceil(5 n / 3) (20 for 12, 14 for 8)."""
     return -(-5 * n // 3)
 
 
 def _graded_panel(lo, hi, scale_hi, n, dtype):
-    """Nodes and weights on [lo, hi] (shapes ()), for a panel whose integrands are
-    smooth at lo: graded towards hi alone (scale `scale_hi`), the sinh map of the power
-    map (`GRADING_POWER`) of the `_single_panel_nodes(n)`-point rule, where
+    """Nodes and weights on [lo, hi] (shapes ()), for a contact that is one panel whose
+    integrands are smooth at lo: one panel graded towards hi alone, the sinh map of the
+    power map (`GRADING_POWER`) of the `_single_panel_nodes(n)`-point rule, where
     `_graded_half_panels` would put n nodes in each half and grade the lower half
     towards lo.
 
-    Where: on a law without a base, the first panel from the contact's deepest point
-    (`_panels_from_smooth_start`): on the front region the rim's axle or a tyre's flat's
-    front end, under Wong–Reece theta_m (both regions' integrands are smooth there).  A
-    driven rim on a law without breakpoints is that one panel.  Measured against 60
-    nodes per half-panel on 400 random driven cases per law (Bekker's, Reece's;
-    `tests/random_cases.py`): rims, straight and at a slip angle, within 1.6e-8 of the
-    load (the half-panels' 24 nodes: 1.2e-6 on Bekker's front region, where the lower
-    half's nodes were spent at the smooth end and the power-law entry got 12); tyres on
-    the front region, half of them soft, within 1.1e-8 (the half-panels: 1.5e-6).  In
-    batches that brake (the first panel ends at the split) rims, rims at a slip angle,
-    tyres and ruts stay within 5.5e-10, as with the half-panels.
+    Where: driving, on a law without a base or breakpoints, the front region of a rim
+    (lo the axle, where the rim is deepest and the law smooth) or of a tyre beyond its
+    flat (lo the flat's front end, the arc's deepest point), and the Wong–Reece stress
+    angle's [theta_m, theta0] of a rim (both regions' integrands are smooth at
+    theta_m).  Measured against 60 nodes per half-panel on 400 random driven cases per
+    law (Bekker's, Reece's; `tests/random_cases.py`): rims, straight and at a slip
+    angle, within 1.6e-8 of the load (the half-panels' 24 nodes: 1.2e-6 on Bekker's
+    front region, where the lower half's nodes were spent at the smooth end and the
+    power-law entry got 12); tyres on the front region, half of them soft, within
+    1.1e-8 (the half-panels: 1.5e-6).
     """
     u, du = _power_map(*_rule(_single_panel_nodes(n), dtype), GRADING_POWER)
     length = hi - lo
@@ -126,19 +125,6 @@ def _graded_panel(lo, hi, scale_hi, n, dtype):
     scale = jax.lax.stop_gradient(jnp.broadcast_to(scale_hi, hi.shape))
     offset, jac = _sinh_offsets(u, du, jnp.where(positive, length, 1.0), scale, 1e-3)
     return jnp.where(positive, hi - offset, hi), jnp.where(positive, jac, 0.0)
-
-
-def _panels_from_smooth_start(angles, scales, n, dtype):
-    """Nodes and weights on the panels between `angles` (`_panel_ends`: increasing, with
-    their grading `scales`) whose first starts where the integrands are smooth (the
-    contact's deepest point on a law without a base): that panel graded towards its
-    upper end alone (`_graded_panel`), the others in half-panels (`_graded_half_panels`).
-    A contact without a cut is that one panel; a zero-length panel gets zero weights."""
-    theta, weight = _graded_panel(angles[0], angles[1], scales[1], n, dtype)
-    if angles.shape[0] == 2:
-        return theta, weight
-    rest = _graded_half_panels(angles[1:-1], angles[2:], scales[1:-1], scales[2:], n, dtype)
-    return jnp.concatenate([theta, rest[0]]), jnp.concatenate([weight, rest[1]])
 
 
 def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype, log_end=None):
@@ -412,12 +398,12 @@ def _direct_nodes(
         # and its mirror image in the rear region.
         points.append((theta_f, inf))
         points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
-    angles, scales = _panel_ends(points, start, theta0, entry_scale)
-    if _is_front(distribution) and not terrain.has_base():
-        # The first panel starts at the axle (a tyre's: the flat's front end), where the
-        # law is smooth.
-        theta, weight = _panels_from_smooth_start(angles, scales, n, theta0.dtype)
+    if len(points) == 2 and _is_front(distribution) and not terrain.has_base():
+        # One panel from the axle (a tyre's: the flat's front end), where the law is
+        # smooth: graded towards the entry alone.
+        theta, weight = _graded_panel(start, theta0, entry_scale, n, theta0.dtype)
     else:
+        angles, scales = _panel_ends(points, start, theta0, entry_scale)
         log_end = None if base_end is None else angles[:-1] == base_end
         theta, weight = _graded_half_panels(
             angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
@@ -511,11 +497,11 @@ def _mirrored_nodes(contact, slip, terrain, distribution, law, n, braking, entry
         behind = split < theta_m
         points.append((star(split), jnp.where(behind, width / jnp.maximum(ratio, 1e-12), width)))
     points += [(theta_f, inf) for theta_f in _breakpoint_angles(contact, terrain)]
-    angles, scales = _panel_ends(points, theta_m, theta0, entry_scale)
-    if not terrain.has_base():
-        # theta_m, the deepest point, is smooth in both regions without a base.
-        front, weight = _panels_from_smooth_start(angles, scales, n, theta0.dtype)
+    if len(points) == 2 and not terrain.has_base():
+        # One panel: theta_m, the deepest point, is smooth in both regions without a base.
+        front, weight = _graded_panel(theta_m, theta0, entry_scale, n, theta0.dtype)
     else:
+        angles, scales = _panel_ends(points, theta_m, theta0, entry_scale)
         front, weight = _graded_half_panels(
             angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype
         )

@@ -77,8 +77,8 @@ class ContactModel(eqx.Module):
     - `accuracy` (static): `"reference"` (default: every contact integral within 1e-7
       of adaptive quadrature) or `"simulator"`, for vehicle simulations and RL: fewer
       quadrature nodes (the shear law's `nodes_simulator`: 6 per panel of Wong snow's
-      closed-form rule, 8 per half-panel of the any-terrain rule (14 on a panel graded
-      towards one end), against 10 and 12-16 (20-27)),
+      closed-form rule, 8 per half-panel of the any-terrain rule (14 on a contact that
+      is one panel graded towards its entry), against 10 and 12-16 (20)),
       for errors up to ~3e-4 of the load and ~1e-8 typically (the worst and median over
       random cases of every law, and the speed it buys, are in the performance guide).
       `nodes_per_panel`, where given, sets the nodes instead.

@@ -74,8 +74,8 @@ class AbstractShearLaw(eqx.Module):
     #: law's, whose entry panel needs only 8 nodes.
     nodes_closed_form: ClassVar[tuple[int, tuple[int, int, int, int]]] = (10, (10, 10, 10, 8))
     #: Default nodes per half-panel of the any-terrain rule (without, with braking); None:
-    #: the law has no any-terrain rule.  A panel from a smooth end (the deepest point on
-    #: a law without a base) takes ceil(5 n / 3) nodes instead (`general._graded_panel`).
+    #: the law has no any-terrain rule.  A contact that is one panel with a smooth lower
+    #: end takes ceil(5 n / 3) nodes on it instead (`general._graded_panel`).
     nodes_any_terrain: ClassVar[tuple[int, int] | None] = (12, 16)
     #: Nodes at the simulator accuracy (`ContactModel(accuracy="simulator")`): on every
     #: panel of the closed-form rule, and on every half-panel of the any-terrain rule
