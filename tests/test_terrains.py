@@ -107,30 +107,28 @@ def fractions(c, wong_reece):
 COMBOS = [(k, wr) for k in KINDS for wr in (False, True) if (k, wr) != ("wong", False)]
 
 
-@pytest.mark.parametrize("kind,wong_reece", COMBOS)
-def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
-    """W, R, T, M within 1e-7 (relative; 1e-3 W as the floor of the scale) of quad."""
-    cases = random_cases(kind, 12, seed=hash((kind, wong_reece)) % 1000)
+def _check_contact_against_quad(kind, cases, wong_reece):
+    """W, R, T, M of `cases` (one batch) within 1e-7 (relative; 1e-3 W as the floor of
+    the scale) of quad."""
     wheel, terrain, dist, stack = batch(kind, cases, wong_reece)
     f = sj.contact_forces(wheel, sj.ContactModel(terrain, dist), stack("th"), stack("slip"))
     got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
     for k, c in enumerate(cases):
         law, z_f = law_of(kind, c)
         exp = ref.contact(
-            c["th"],
-            c["slip"],
-            c["D"],
-            c["b"],
-            law,
-            c["c"],
-            c["tp"],
-            c["K"],
-            *fractions(c, wong_reece),
-            z_f=z_f,
-        )
+            c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"],
+            *fractions(c, wong_reece), z_f=z_f,
+        )  # fmt: skip
         scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
         assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
     assert np.allclose(f.drawbar_pull, f.thrust - f.motion_resistance)
+
+
+@pytest.mark.parametrize("kind,wong_reece", COMBOS)
+def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
+    """W, R, T, M within 1e-7 (relative; 1e-3 W as the floor of the scale) of quad."""
+    cases = random_cases(kind, 12, seed=hash((kind, wong_reece)) % 1000)
+    _check_contact_against_quad(kind, cases, wong_reece)
 
 
 @pytest.mark.parametrize("kind,wong_reece", [(k, wr) for k in ("bekker", "reece") for wr in (0, 1)])
@@ -141,17 +139,7 @@ def test_driven_rims_one_graded_panel_match_adaptive_quadrature(kind, wong_reece
     cases = random_cases(kind, 12, seed=7 + wong_reece)
     for c in cases:
         c["slip"] = abs(c["slip"])
-    wheel, terrain, dist, stack = batch(kind, cases, wong_reece)
-    f = sj.contact_forces(wheel, sj.ContactModel(terrain, dist), stack("th"), stack("slip"))
-    got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
-    for k, c in enumerate(cases):
-        law, _ = law_of(kind, c)
-        exp = ref.contact(
-            c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"],
-            *fractions(c, wong_reece),
-        )  # fmt: skip
-        scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
-        assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
+    _check_contact_against_quad(kind, cases, wong_reece)
 
 
 @pytest.mark.parametrize("kind", KINDS)
