@@ -443,10 +443,10 @@ def solve_wheel(
         defaults classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified
         24 + 24 and 4 x 16, none 8 + 8.  Other terrains / Wong–Reece: 12 nodes per
         half-panel, 16 when the batch brakes; a driven rim on a law without a base or
-        breakpoints is one panel graded towards its entry, of ceil(5 n / 3) nodes for
-        n per half-panel (20 by default).  With the defaults every contact integral
-        is within 1e-7 (relative) of adaptive quadrature over the documented range.  An
-        integer sets all.
+        breakpoints (and a driven tyre's arc beyond its flat there) is one panel graded
+        towards its entry, of ceil(5 n / 3) nodes for n per half-panel (20 by
+        default).  With the defaults every contact integral is within 1e-7 (relative)
+        of adaptive quadrature over the documented range.  An integer sets all.
       - `accuracy`: `"reference"` (the defaults above) or `"simulator"` (6 nodes per
         panel of Wong snow's front-region rule, 8 per half-panel of the others: errors
         up to ~3e-4 of the load over random cases, ~1e-8 typically, for vehicle

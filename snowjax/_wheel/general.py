@@ -108,7 +108,8 @@ def _graded_panel(lo, hi, scale_hi, n, dtype):
     `_graded_half_panels` would put n nodes in each half and grade the lower half
     towards lo.
 
-    Where: driving, on a law without a base or breakpoints, the front region of a rim
+    Where: on a law without a base or breakpoints, in a contact cut only at its ends
+    (driving, or without a shear stress: no braking split), the front region of a rim
     (lo the axle, where the rim is deepest and the law smooth) or of a tyre beyond its
     flat (lo the flat's front end, the arc's deepest point), and the Wong–Reece stress
     angle's [theta_m, theta0] of a rim (both regions' integrands are smooth at
