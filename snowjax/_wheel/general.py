@@ -128,6 +128,22 @@ def _graded_panel(lo, hi, scale_hi, n, dtype):
     return jnp.where(positive, hi - offset, hi), jnp.where(positive, jac, 0.0)
 
 
+def _panel_nodes(points, start, theta0, entry_scale, n, smooth_start, base_end=None):
+    """Nodes and weights on [start, theta0] cut at `points` (`_panel_ends`' (angle,
+    scale) pairs, the first two the ends): one panel graded towards theta0 alone
+    (`_graded_panel`) where there is no cut but the ends and the integrands are smooth
+    at `start` (`smooth_start`, static), else two graded half-panels per panel, the
+    lower half of the panel that starts at `base_end` (a base's lowest point, or None)
+    with the log-singular grading."""
+    if smooth_start and len(points) == 2:
+        return _graded_panel(start, theta0, entry_scale, n, theta0.dtype)
+    angles, scales = _panel_ends(points, start, theta0, entry_scale)
+    log_end = None if base_end is None else angles[:-1] == base_end
+    return _graded_half_panels(
+        angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
+    )
+
+
 def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype, log_end=None):
     """Nodes and weights on [lo, hi]: two halves graded towards lo and hi respectively.
 
@@ -399,16 +415,10 @@ def _direct_nodes(
         # and its mirror image in the rear region.
         points.append((theta_f, inf))
         points += [(rear, inf) for rear in distribution.rear_angles(theta_f, theta0, slip)]
-    if len(points) == 2 and _is_front(distribution) and not terrain.has_base():
-        # One panel from the axle (a tyre's: the flat's front end), where the law is
-        # smooth: graded towards the entry alone.
-        theta, weight = _graded_panel(start, theta0, entry_scale, n, theta0.dtype)
-    else:
-        angles, scales = _panel_ends(points, start, theta0, entry_scale)
-        log_end = None if base_end is None else angles[:-1] == base_end
-        theta, weight = _graded_half_panels(
-            angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype, log_end
-        )
+    # The front region starts at the axle (a tyre's: the flat's front end), smooth
+    # without a base.
+    smooth = _is_front(distribution) and not terrain.has_base()
+    theta, weight = _panel_nodes(points, start, theta0, entry_scale, n, smooth, base_end)
     for _ in spans:
         lead, lead_weight = _smooth_span_nodes(theta_r, start, slip, contact, law, n, split, rates)
         theta = jnp.concatenate([lead, theta])
@@ -498,14 +508,8 @@ def _mirrored_nodes(contact, slip, terrain, distribution, law, n, braking, entry
         behind = split < theta_m
         points.append((star(split), jnp.where(behind, width / jnp.maximum(ratio, 1e-12), width)))
     points += [(theta_f, inf) for theta_f in _breakpoint_angles(contact, terrain)]
-    if len(points) == 2 and not terrain.has_base():
-        # One panel: theta_m, the deepest point, is smooth in both regions without a base.
-        front, weight = _graded_panel(theta_m, theta0, entry_scale, n, theta0.dtype)
-    else:
-        angles, scales = _panel_ends(points, theta_m, theta0, entry_scale)
-        front, weight = _graded_half_panels(
-            angles[:-1], angles[1:], scales[:-1], scales[1:], n, theta0.dtype
-        )
+    # theta_m, the deepest point, is smooth in both regions without a base.
+    front, weight = _panel_nodes(points, theta_m, theta0, entry_scale, n, not terrain.has_base())
     rear = theta_r + (theta0 - front) * ratio
     theta = jnp.concatenate([front, rear])
     geometry = _contact_points(contact, theta)
