@@ -142,6 +142,41 @@ def test_driven_rims_one_graded_panel_match_adaptive_quadrature(kind, wong_reece
     _check_contact_against_quad(kind, cases, wong_reece)
 
 
+def test_driven_layered_rims_take_the_closed_form_rule_and_match_adaptive_quadrature():
+    """A driven batch on layered snow's front region takes the closed-form rule
+    (`FallingFrontRimRule`: its two layers' integrals in closed form, panels cut at the
+    ice's failure angle and once more beyond it); here with layers of different strength
+    (c, tan phi, K below the ice are the bottom layer's), K down to 2 mm and slips to 0.9,
+    at slip angle 0 and 0.2 rad: W, R, T, M within 1e-7 of quad, as above (the third
+    panel alone erred by 2.4e-5 of W at K = 2 mm)."""
+    from snowjax._wheel.front_rim import FallingFrontRimRule, _contact_rule
+    from snowjax._wheel.running import _STRAIGHT
+
+    cases = random_cases("layered", 12, seed=11)
+    rng = np.random.default_rng(12)
+    lower = []
+    for c in cases:
+        c["slip"], c["K"] = abs(c["slip"]), rng.uniform(0.002, 0.03)
+        lower.append((rng.uniform(0, 5e3), rng.uniform(0.1, 0.8), rng.uniform(0.002, 0.03)))
+    wheel, terrain, _, stack = batch("layered", cases, False)
+    low = np.array(lower)
+    bottom = sj.WongSnow(terrain.bottom.p_w, terrain.bottom.z_w, *low.T)
+    terrain = sj.LayeredSnow(terrain.top, bottom, terrain.ice_failure_pressure)
+    assert isinstance(
+        _contact_rule(terrain, sj.FrontRegion(), wheel, _STRAIGHT), FallingFrontRimRule
+    )
+    f = sj.contact_forces(wheel, terrain, stack("th"), stack("slip"))
+    got = np.stack([f.vertical_load, f.motion_resistance, f.thrust, f.torque], 1)
+    for k, c in enumerate(cases):
+        law, z_f = law_of("layered", c)
+        exp = ref.contact(
+            c["th"], c["slip"], c["D"], c["b"], law, c["c"], c["tp"], c["K"], z_f=z_f,
+            lower=tuple(lower[k]),
+        )  # fmt: skip
+        scale = np.maximum(np.abs(exp), 1e-3 * abs(exp[0]) * np.array([1, 1, 1, c["D"] / 2]))
+        assert np.max(np.abs(got[k] - exp) / scale) < 1e-7, (k, got[k], exp)
+
+
 @pytest.mark.parametrize("kind", KINDS)
 def test_per_point_stresses_on_every_terrain_and_distribution(kind):
     """`normal_stress` / `shear_stress` at rim angles across the contact (front and, with
@@ -525,6 +560,51 @@ def test_float32_general_path_has_no_nan():
     both = (np.asarray(st.status) == 0) & (np.asarray(st64.status) == 0)
     assert both.sum() > 40
     assert np.max(np.abs(np.asarray(st.sinkage)[both] / np.asarray(st64.sinkage)[both] - 1)) < 1e-3
+
+
+def test_layered_front_rim_integrals_match_adaptive_quadrature():
+    """`LayeredSnow.front_rim_integrals` (the bottom layer's closed forms to the ice's
+    failure angle, the top layer's beyond it) against SciPy's quad of the layered law on
+    the rim, at every kind of contact: above the failure sinkage, reaching just past it,
+    reaching below the top layer's z_w (where its closed form changes from arctangents to
+    logarithms), next to and on the frozen ground."""
+    from scipy import integrate
+
+    rng = np.random.default_rng(3)
+    d = 0.736
+    for k in range(40):
+        p1, zw1 = rng.uniform(10e3, 80e3), rng.uniform(0.03, 0.2)
+        top = sj.WongSnow(p1, zw1, 1e3, 0.3, 0.01)
+        bottom = sj.WongSnow(rng.uniform(10e3, 80e3), zw1 + rng.uniform(0.01, 0.3), 1e3, 0.3, 0.01)
+        snow = sj.LayeredSnow(top, bottom, rng.uniform(0.2, 4.0) * p1)
+        depth, z_f = float(bottom.z_w), float(snow.failure_sinkage)
+        z0 = [
+            rng.uniform(0.05, 0.95) * z_f,
+            z_f * rng.uniform(1.0001, 1.05),
+            rng.uniform(zw1, depth),
+            depth * (1 - 10 ** rng.uniform(-12, -3)),
+            depth,
+        ][k % 5]
+        theta0 = 2 * math.asin(math.sqrt(z0 / d))
+        clearance = depth - z0
+
+        def sigma(theta, clearance=clearance, depth=depth, z_f=z_f, top=top, bottom=bottom):
+            height = clearance + d * math.sin(theta / 2) ** 2
+            if depth - height >= z_f:  # below the ice: the bottom layer, over the ground
+                return -float(bottom.p_w) * math.log(height / depth)
+            return -float(top.p_w) * math.log1p(-(depth - height) / float(top.z_w))
+
+        theta_f = 2 * math.asin(math.sqrt(max(math.sin(theta0 / 2) ** 2 - z_f / d, 0.0)))
+        points = [p for p in (1e-12, theta_f) if 0 < p < theta0]
+        expected = [
+            integrate.quad(
+                lambda t, h=h: sigma(t) * h(t), 0, theta0, points=points or None, limit=200,
+                epsabs=0, epsrel=1e-12,
+            )[0]
+            for h in (math.cos, math.sin)
+        ]  # fmt: skip
+        got = snow.front_rim_integrals(theta0, d, clearance)
+        np.testing.assert_allclose(np.asarray(got, float), expected, rtol=1e-10, err_msg=str(k))
 
 
 @pytest.mark.parametrize("theta0, clearance_fraction", [(0.1, 0.9), (0.5, 0.3), (0.9, 0.0)])

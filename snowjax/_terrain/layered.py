@@ -12,8 +12,8 @@ from .._constants import (
     THESIS_DIAMETER,
 )
 from .._leaves import _as_float, parameter
-from .base import AbstractTerrain
-from .wong import WongSnow, wong_pressure
+from .base import AbstractTerrain, _half_angle_arc
+from .wong import WongSnow, _xlogx, wong_pressure
 
 
 class LayeredSnow(AbstractTerrain):
@@ -121,13 +121,60 @@ class LayeredSnow(AbstractTerrain):
         return self.bottom.z_w
 
     def pressure_at_clearance(self, clearance, width=None):
-        """The law at `clearance` [m] above the frozen ground [Pa]: the bottom layer's
-        Wong law written without cancellation (`WongSnow.pressure_at_clearance`) below
-        the ice's failure, the law itself above it."""
-        sinkage = self.depth - clearance
-        after = sinkage >= self.failure_sinkage
-        below_ice = self.bottom.pressure_at_clearance(jnp.where(after, clearance, self.depth))
-        return jnp.where(after, below_ice, self.pressure(jnp.where(after, 0.0, sinkage), width))
+        """The law at `clearance` [m] above the frozen ground [Pa], with one logarithm:
+        `-p_w ln(h / z_w)` of the layer that acts, h the clearance above that layer's
+        base (the frozen ground below the ice's failure: the bottom layer's Wong law
+        written without cancellation, `WongSnow.pressure_at_clearance`; above it the
+        top layer's, h = top.z_w - z); `+inf` on the frozen ground."""
+        clearance = jnp.asarray(clearance)
+        after = self.depth - clearance >= self.failure_sinkage
+        top, bottom = self.top, self.bottom
+        # The layer's clearance over its z_w: one reciprocal per parameter set.
+        above_top_base = clearance - (bottom.z_w - top.z_w)
+        ratio = jnp.where(after, clearance * (1 / bottom.z_w), above_top_base * (1 / top.z_w))
+        return -jnp.where(after, bottom.p_w, top.p_w) * jnp.log(ratio)
+
+    def front_rim_integrals(self, entry_angle, diameter, clearance):
+        """Exact `int_0^theta0 sigma cos` and `int_0^theta0 sigma sin` [Pa] on the front
+        region of a rim of diameter D [m] whose lowest point lies `clearance` [m] above
+        the frozen ground (`AbstractTerrain.front_rim_integrals`).
+
+        The rim point at theta is z = D [sin^2(theta0 / 2) - sin^2(theta / 2)] deep
+        (4.5): the bottom layer's law holds from the axle to theta_f, where z reaches the
+        failure sinkage z_f (`WongSnow.rim_integrals_to` of the bottom layer, at the
+        clearance above the frozen ground), the top layer's from theta_f to theta0
+        (theta_f = 0 where the contact stays above z_f).  On the top layer's part, with
+        Z = 1 - z / top.z_w = Z0 + 2 a sin^2(theta / 2) (a = D / (2 top.z_w); Z0 < 0
+        where the rim reaches below the top layer's z_w, which only the bottom layer's
+        part does) and Z_f = Z(theta_f), integration by parts as in
+        `WongSnow.front_rim_integrals` (Z(theta0) = 1) gives `int sigma cos = p_w ln(Z_f)
+        sin(theta_f) + p_w a int sin^2 / Z` and `int sigma sin = (p_w / a)(1 - Z_f + Z_f
+        ln Z_f)`; `a int_(theta_f)^(theta0) sin^2 / Z = [sin + (Z0 + a) theta / a] + K`
+        with, in t = tan(theta / 2) and u = sqrt(Z0 + 2 a), `K = -(Z0 u^2 / a) int 2 dt /
+        (Z0 + u^2 t^2) = -(2 / a) Z0 u x phi(Z0 x^2)`, x = u (t0 - t_f) / (Z0 + u^2 t_f
+        t0), phi(y) = atan(sqrt y) / sqrt y (y > 0), atanh(sqrt -y) / sqrt -y (y < 0), 1
+        at 0: the difference of the two ends' arctangents (or, Z0 < 0, logarithms)
+        taken as one, so that neither sign of Z0 nor Z0 -> 0 loses digits.
+        """
+        top, bottom = self.top, self.bottom
+        s_0 = jnp.sin(entry_angle / 2) ** 2
+        theta_f = _half_angle_arc(s_0 - self.failure_sinkage / diameter)
+        cos_b, sin_b = bottom.rim_integrals_to(theta_f, diameter, clearance)
+        a = diameter / (2 * top.z_w)
+        z0_rel = (clearance - (bottom.z_w - top.z_w)) / top.z_w
+        z_f = z0_rel + 2 * a * jnp.sin(theta_f / 2) ** 2
+        t_f, t_0 = jnp.tan(theta_f / 2), jnp.tan(entry_angle / 2)
+        u2 = z0_rel + 2 * a
+        u = jnp.sqrt(u2)
+        x = u * (t_0 - t_f) / (z0_rel + u2 * t_f * t_0)
+        turn = (
+            jnp.sin(entry_angle) - jnp.sin(theta_f)
+            + (z0_rel + a) * (entry_angle - theta_f) / a
+            - 2 / a * z0_rel * u * x * _atan_ratio(z0_rel * x**2)
+        )  # fmt: skip
+        cos_t = top.p_w * (jnp.log(z_f) * jnp.sin(theta_f) + turn)
+        sin_t = top.p_w / a * (1 - z_f + _xlogx(z_f))
+        return cos_b + cos_t, sin_b + sin_t
 
     def constraints(self):
         bottom_deeper = self.bottom.z_w > self.top.z_w
@@ -158,3 +205,13 @@ class LayeredSnow(AbstractTerrain):
         top = eqx.tree_at(lambda s: s.z_w, top, jnp.asarray(0.10))
         bottom = eqx.tree_at(lambda s: s.z_w, bottom, jnp.asarray(0.30))
         return cls(top=top, bottom=bottom, ice_failure_pressure=60e3)
+
+
+def _atan_ratio(y):
+    """atan(sqrt y) / sqrt y for y > 0, atanh(sqrt -y) / sqrt -y for -1 < y < 0, 1 at y
+    = 0 (a series within 1e-4 of it, where the two quotients lose digits)."""
+    small = jnp.abs(y) < 1e-4
+    safe = jnp.where(small, 1.0, y)
+    root = jnp.sqrt(jnp.abs(safe))
+    far = jnp.where(safe > 0, jnp.arctan(root), jnp.arctanh(jnp.minimum(root, 1.0))) / root
+    return jnp.where(small, 1 - y / 3 + y * y / 5, far)

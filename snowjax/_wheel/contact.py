@@ -124,11 +124,9 @@ def shear_stress(
     _check_model(wheel, model)
     law, distribution = model.shear, model.distribution
     contact = type(wheel).contact(wheel, jnp.asarray(entry_angle), snow)
+    sigma, c, tan_phi, k = _rim_stress_properties(theta, slip, contact, snow, distribution)
     if _closed_form_rule(snow, distribution, wheel):
         sigma = normal_stress(theta, entry_angle, wheel, snow)
-        c, tan_phi, k = snow.cohesion, snow.tan_phi, snow.shear_modulus
-    else:
-        sigma, c, tan_phi, k = _rim_stress_properties(theta, slip, contact, snow, distribution)
     if not law.mobilises:
         return jnp.zeros_like(sigma)
     theta = jnp.asarray(theta)

@@ -5,10 +5,10 @@ stresses carries the wheel load, W(theta0) = F_z, with `optimistix.root_find` (k
 inside a bracket, `bracketed.py`): one solver (`_solve_layout`) for every terrain,
 stress distribution, shear law and slip angle, which takes its contact integrals, its
 start and its steps from the contact rule (`rules.py`: the any-terrain rule, whose cold
-start on a law that rises is a power-law model of the law and whose steps are secant
-steps, `BracketedSecant`; or the closed-form accelerations of `front_rim.py` where the
-terrain offers them, started from the closed-form no-shear balance, and warm starts,
-by Newton steps, `BracketedNewton`).
+start on a law that rises is a power-law model of the law, on a law that can fall W at
+a few entry angles, and whose steps are secant steps, `BracketedSecant`; or the
+closed-form accelerations of `front_rim.py` where the terrain offers them, started from
+the closed-form no-shear balance, and warm starts, by Newton steps, `BracketedNewton`).
 The unknown is s >= s_min with `theta0 = theta_cap exp(-s^2)` and the residual is
 `ln(W / F_z)`.  Near the base W approaches the layer's capacity like
 `W_cap - k sqrt(theta_cap - theta0)`, i.e. linearly in s, and for shallow sinkage
@@ -209,17 +209,19 @@ def _solve_layout(
         secant,
     )
     if secant:
-        # The secant's start holds no element at the cap: one that ended on it is beyond
-        # the layer's capacity where W there falls short of the load (W at the cap is
-        # evaluated only where some element ended there).
-        at_cap = s <= lower
+        # The power-law start holds no element at the cap: one that ended on it is
+        # beyond the layer's capacity where W there falls short of the load (W at the
+        # cap is evaluated only where some element ended there).  A scan start's
+        # elements held at the cap stay held.
+        at_cap = (s <= lower) & ~over
         capacity = jax.lax.cond(
             _any_in_batch(at_cap),
             lambda: vertical(_theta_from_s(lower, theta_cap)),
             lambda: jnp.full_like(load, jnp.inf),
         )
-        over = at_cap & (load >= capacity)
-        target = jnp.where(over, 0.5 * capacity, target)
+        newly = at_cap & (load >= capacity)
+        over = over | newly
+        target = jnp.where(newly, 0.5 * capacity, target)
 
     def entry(s, over, th_cap):  # theta0 at s (held at the cap where over it)
         return jnp.where(over, th_cap, _theta_from_s(s, th_cap))

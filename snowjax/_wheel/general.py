@@ -578,13 +578,25 @@ class AbstractGeneralRule(AbstractContactRule):
         )
 
 
+def _falling_law_start(vertical, theta_cap, load, slip, wheel, terrain, distribution, braking):
+    """(over, target, lower, upper, s0, secant) of a cold start on a law that can fall
+    (`start._scan_start`, at the distribution's deepest stress angle and the wheel's
+    `start_angles`), for the secant steps of `BracketedSecant`."""
+    deepest = functools.partial(_deepest_stress_angle, distribution, slip)
+    # A wheel's bends serve the driving layout: a braked wheel's W is no power of theta0
+    # between the grid's points either way (a 100 kPa tyre on Bekker's snow with
+    # Wong–Reece, slips -0.3 to 0.9: as many Newton steps with the bend, 1.13x the time).
+    bends = () if braking else type(wheel).start_angles(wheel, terrain)
+    return _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends)
+
+
 class AnyTerrainRule(AbstractGeneralRule):
     """The any-terrain rule: `general_contact` at the law's `nodes_any_terrain`.  On a
     law whose pressure rises it starts from a power-law model of the law
     (`start._power_law_start`) and solves by secant steps (`BracketedSecant`: W alone at
     each step); on a law that can fall (the shallowest equilibrium is wanted), from W
     at two entry angles, at the wheel's `start_angles` and at the law's breakpoints
-    (`start._scan_start`), by Newton steps."""
+    (`start._scan_start`), by the same secant steps inside the bracket it finds."""
 
     def start(
         self, vertical, theta_cap, load, slip, wheel, terrain, distribution, shear, braking
@@ -592,14 +604,9 @@ class AnyTerrainRule(AbstractGeneralRule):
         del shear
         if terrain.pressure_rises():
             return _power_law_start(theta_cap, load, slip, wheel, terrain, distribution)
-        deepest = functools.partial(_deepest_stress_angle, distribution, slip)
-        # A wheel's bends serve the driving layout: a braked wheel's W is no power of
-        # theta0 between the grid's points either way (a 100 kPa tyre on Bekker's snow
-        # with Wong–Reece, slips -0.3 to 0.9: as many Newton steps with the bend, 1.13x
-        # the time).
-        bends = () if braking else type(wheel).start_angles(wheel, terrain)
-        start = _scan_start(vertical, theta_cap, load, terrain, wheel.diameter, deepest, bends)
-        return *start, None
+        return _falling_law_start(
+            vertical, theta_cap, load, slip, wheel, terrain, distribution, braking
+        )
 
     def warm_start(self, vertical, theta_cap, load, slip, guess, wheel, terrain):
         del slip, wheel, terrain
