@@ -127,7 +127,8 @@ def _check_contact_against_quad(kind, cases, wong_reece):
 @pytest.mark.parametrize("kind,wong_reece", COMBOS)
 def test_contact_integrals_match_adaptive_quadrature(kind, wong_reece):
     """W, R, T, M within 1e-7 (relative; 1e-3 W as the floor of the scale) of quad."""
-    cases = random_cases(kind, 12, seed=hash((kind, wong_reece)) % 1000)
+    # A seed of its own per combination (`hash` of a string changes with each process).
+    cases = random_cases(kind, 12, seed=2 * KINDS.index(kind) + wong_reece)
     _check_contact_against_quad(kind, cases, wong_reece)
 
 

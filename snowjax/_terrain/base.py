@@ -130,7 +130,7 @@ class AbstractTerrain(eqx.Module):
         ice failure), so `solve_wheel`'s cold start also evaluates W where the contact's
         deepest sinkage reaches each breakpoint (W's local maxima) to bracket the
         shallowest equilibrium.  A law with kinks only (`Rut`) says True."""
-        return not self.breakpoint_sinkages()
+        return not type(self).breakpoint_sinkages(self)
 
     def front_rim_integrals(
         self,

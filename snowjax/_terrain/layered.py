@@ -90,6 +90,10 @@ class LayeredSnow(AbstractTerrain):
         """(z_f,): the sinkage [m] where the ice breaks and the pressure drops."""
         return (self.failure_sinkage,)
 
+    def pressure_rises(self) -> bool:
+        """False: the pressure drops where the ice breaks (static)."""
+        return False
+
     @property
     def failure_sinkage(self) -> Array:
         """z_f = top.z_w (1 - exp(-p_f / top.p_w)): sinkage at which the ice breaks [m]."""

@@ -258,7 +258,7 @@ class Rut(AbstractTerrain):
 
     def pressure_rises(self) -> bool:
         """The reloading line rises, so the law rises where the virgin law does."""
-        return self.virgin.pressure_rises()
+        return type(self.virgin).pressure_rises(self.virgin)
 
     def constraints(self):
         own = [r for r in AbstractTerrain.constraints(self) if "." not in r[0]]
