@@ -103,6 +103,13 @@ def _kinked(terrain) -> bool:
     return type(terrain).breakpoint_sinkages is not AbstractTerrain.breakpoint_sinkages
 
 
+def _strength_varies(terrain) -> bool:
+    """Whether a law's c, tan phi and K may change with the sinkage (static): whether its
+    class overrides `rim_properties` (`LayeredSnow`; a `Rut`, which takes its virgin
+    law's).  The closed-form rule then takes them at each node's sinkage."""
+    return type(terrain).rim_properties is not AbstractTerrain.rim_properties
+
+
 def _kink_angle(theta0, diameter, terrain):
     """theta_d [rad]: where the rim meets a law's one kink, the sinkage d [m] below the
     surface (`breakpoint_sinkages`): sin^2(theta_d / 2) = sin^2(theta0 / 2) - d / D,
@@ -389,7 +396,9 @@ def _closed_form_contact(
         height = jnp.maximum(height, jnp.finfo(height.dtype).tiny)
     sigma = terrain.pressure_at_clearance(height, width)
     # The strength acting at each node's sinkage (a layered law's changes with depth).
-    _, cohesion, tan_phi, node_modulus = terrain.rim_properties(terrain.depth - height, width)
+    cohesion, tan_phi, node_modulus = terrain.cohesion, terrain.tan_phi, modulus
+    if _strength_varies(terrain):
+        _, cohesion, tan_phi, node_modulus = terrain.rim_properties(terrain.depth - height, width)
     j = _shear_displacement(theta, theta0, slip, r, sin, jnp.sin(theta0))
     nodes = ContactNodes(
         contact, terrain, slip, running.tan_slip_angle(), theta, weight, sin, cos,
@@ -408,7 +417,9 @@ def _closed_form_contact(
     # theta^2 ln theta at the singular end.
     lowest = jnp.maximum(clearance, jnp.finfo(clearance.dtype).tiny) if kinks else clearance
     # The strength at the axle: the subtracted part's (a layered law's deepest layer).
-    _, _, tp, axle_modulus = terrain.rim_properties(terrain.depth - lowest, width)
+    tp, axle_modulus = terrain.tan_phi, modulus
+    if _strength_varies(terrain):
+        _, _, tp, axle_modulus = terrain.rim_properties(terrain.depth - lowest, width)
     (g0, gy0), (g1, gy1) = _axle_mobilisation(
         contact, slip, terrain, law, lowest, stresses, running.tan_slip_angle(), axle_modulus
     )

@@ -269,11 +269,12 @@ def _scan_start(vertical, theta_cap, load, terrain, diameter, deepest, bends=())
     target) at the bracket's ends and the chord's slope in s^2 between them), one
     evaluation of W each where a Newton step took W and its tangent; the bracket keeps
     them on the shallowest crossing, as it kept Newton's.  Layered snow, 1-9 kN / 4,
-    slips 0-0.9, batch 2,048 (one chunk), one core: 0.80x the time of the Newton steps
-    on the front region, 0.52x with Wong–Reece.  Two more grid points between the
-    breakpoint's angle and s^2 = 8 (at s^2 + 0.1 and + 0.5, or + 0.15 and + 0.7, of the
-    breakpoint's), or the power-law model's root (`_power_law_root`) as one, cost more
-    evaluations of W than they saved (1.1-1.4x the time).
+    slips 0-0.9, batch 2,048 (one chunk), one core: 0.78x the time of the Newton steps
+    on the front region, 0.53x with Wong–Reece.  More grid points between the
+    breakpoint's angle and s^2 = 8 (one where the deepest sinkage is half the
+    breakpoint's, s^2 + ln sqrt 2; two at s^2 + 0.1 and + 0.5, or + 0.15 and + 0.7), or
+    the power-law model's root (`_power_law_root`) as one, cost more evaluations of W
+    than they saved (1.11-1.38x the time).
     """
     s_lo = _s_min(load.dtype)
     grid = [jnp.full_like(load, s) for s in (s_lo, S_MID)]
