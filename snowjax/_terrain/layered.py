@@ -133,10 +133,20 @@ class LayeredSnow(AbstractTerrain):
         clearance = jnp.asarray(clearance)
         after = self.depth - clearance >= self.failure_sinkage
         top, bottom = self.top, self.bottom
-        # The layer's clearance over its z_w: one reciprocal per parameter set.
+        # The layer's clearance over its z_w: one reciprocal per parameter set.  Above
+        # the failure the top layer's is at least its value there, exp(-p_f / top.p_w)
+        # (kept so where clearance - (bottom.z_w - top.z_w) loses its digits: float32,
+        # p_f >> top.p_w).
         above_top_base = clearance - (bottom.z_w - top.z_w)
-        ratio = jnp.where(after, clearance * (1 / bottom.z_w), above_top_base * (1 / top.z_w))
+        top_ratio = jnp.maximum(above_top_base * (1 / top.z_w), self._failure_ratio)
+        ratio = jnp.where(after, clearance * (1 / bottom.z_w), top_ratio)
         return -jnp.where(after, bottom.p_w, top.p_w) * jnp.log(ratio)
+
+    @property
+    def _failure_ratio(self) -> Array:
+        """1 - z_f / top.z_w = exp(-p_f / top.p_w) [-]: the top layer's Z where the ice
+        breaks."""
+        return jnp.exp(-self.ice_failure_pressure / self.top.p_w)
 
     def front_rim_integrals(self, entry_angle, diameter, clearance):
         """Exact `int_0^theta0 sigma cos` and `int_0^theta0 sigma sin` [Pa] on the front
@@ -166,15 +176,30 @@ class LayeredSnow(AbstractTerrain):
         cos_b, sin_b = bottom.rim_integrals_to(theta_f, diameter, clearance)
         a = diameter / (2 * top.z_w)
         z0_rel = (clearance - (bottom.z_w - top.z_w)) / top.z_w
-        z_f = z0_rel + 2 * a * jnp.sin(theta_f / 2) ** 2
+        # Z_f = exp(-p_f / top.p_w) where the contact reaches the failure, else Z0 (above
+        # it): neither from Z0 + 2 a sin^2(theta_f / 2), which cancels where Z_f is small.
+        failure = self._failure_ratio
+        z_f = jnp.where(theta_f > 0, failure, jnp.maximum(z0_rel, failure))
         t_f, t_0 = jnp.tan(theta_f / 2), jnp.tan(entry_angle / 2)
         u2 = z0_rel + 2 * a
         u = jnp.sqrt(u2)
-        x = u * (t_0 - t_f) / (z0_rel + u2 * t_f * t_0)
+        # Z0 + u^2 t_f t0 = Z_f (1 + t_f^2) + u^2 t_f (t0 - t_f): two positive terms.
+        rise = u * (t_0 - t_f)
+        den = z_f * (1 + t_f**2) + u2 * t_f * (t_0 - t_f)
+        x = rise / den
+        # Z0 < 0 (beta = sqrt(-Z0)): K = (beta u / a) ln((den + beta rise) / (den - beta
+        # rise)), den - beta rise = Z_f (1 + t_f^2)(1 + rise / (u t_f + beta)) without
+        # the cancellation that leaves float32 no digits where Z_f is small.
+        beta = jnp.sqrt(jnp.maximum(-z0_rel, 0.0))
+        below = z0_rel < 0
+        spread = jnp.where(below, u * t_f + beta, 1.0)
+        near = z_f * (1 + t_f**2) * (1 + rise / spread)
+        logs = beta * u / a * jnp.log(jnp.where(below, (den + beta * rise) / near, 1.0))
+        arcs = -2 / a * z0_rel * u * x * _atan_ratio(jnp.maximum(z0_rel, 0.0) * x**2)
         turn = (
             jnp.sin(entry_angle) - jnp.sin(theta_f)
             + (z0_rel + a) * (entry_angle - theta_f) / a
-            - 2 / a * z0_rel * u * x * _atan_ratio(z0_rel * x**2)
+            + jnp.where(below, logs, arcs)
         )  # fmt: skip
         cos_t = top.p_w * (jnp.log(z_f) * jnp.sin(theta_f) + turn)
         sin_t = top.p_w / a * (1 - z_f + _xlogx(z_f))
@@ -212,10 +237,8 @@ class LayeredSnow(AbstractTerrain):
 
 
 def _atan_ratio(y):
-    """atan(sqrt y) / sqrt y for y > 0, atanh(sqrt -y) / sqrt -y for -1 < y < 0, 1 at y
-    = 0 (a series within 1e-4 of it, where the two quotients lose digits)."""
-    small = jnp.abs(y) < 1e-4
-    safe = jnp.where(small, 1.0, y)
-    root = jnp.sqrt(jnp.abs(safe))
-    far = jnp.where(safe > 0, jnp.arctan(root), jnp.arctanh(jnp.minimum(root, 1.0))) / root
-    return jnp.where(small, 1 - y / 3 + y * y / 5, far)
+    """atan(sqrt y) / sqrt y for y >= 0, 1 at y = 0 (a series below 1e-4, where the
+    quotient loses digits)."""
+    small = y < 1e-4
+    root = jnp.sqrt(jnp.where(small, 1.0, y))
+    return jnp.where(small, 1 - y / 3 + y * y / 5, jnp.arctan(root) / root)

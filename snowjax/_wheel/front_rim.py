@@ -1,7 +1,8 @@
 """Wong's accelerations: the contact rule of a rigid rim, running straight or at a slip
 angle, on the front region of a terrain law that offers closed forms of its rim integrals
-(`AbstractTerrain.front_rim_integrals`: `WongSnow`, and a `Rut` on it), as one rule module
-(`FrontRimRule`), and the one place that chooses it (`_contact_rule`); every other
+(`AbstractTerrain.front_rim_integrals`: `WongSnow`, a `Rut` on it, `LayeredSnow`), as one
+rule module (`FrontRimRule`; `FallingFrontRimRule` on a law that can fall at its
+breakpoint), and the one place that chooses it (`_contact_rule`); every other
 combination takes the any-terrain rule of `general.py` (`AnyTerrainRule`).
 
 Quadrature.  Wong's normal stress `sigma = -p_w ln Z` with `Z = Z0 + 2 a sin^2(theta / 2)`,
@@ -40,9 +41,13 @@ A law with one kink (a `Rut` on Wong snow, whose reloading line meets the virgin
 the sinkage d) has a panel end there (`_nodes`: three panels driving, the braking panel
 that holds it cut in two), which moves with the kink for derivatives (`_moving`); its closed forms
 include the reloading line's share.  Measured against SciPy (quad + brentq on the rut's
-law) over 28 random ruts, driven and braked: within 6e-12.
+law) over 28 random ruts, driven and braked: within 6e-12.  A law whose pressure drops at
+its one breakpoint (`LayeredSnow`, where the ice breaks) has the same panel end there,
+driving the next panel graded towards it (`_nodes`, `jumps`); c, tan phi and K are then
+those of each node's layer (`_strength_varies`).
 
-The solver's start on this rule is the closed-form no-shear balance (`_closed_form_start`).
+The solver's start on this rule is the closed-form no-shear balance (`_closed_form_start`);
+on a law that can fall, the any-terrain rule's scan (`FallingFrontRimRule`).
 """
 
 from __future__ import annotations
@@ -91,7 +96,8 @@ def _clearance(entry_angle, diameter, terrain):
 def _closed_form_rule(terrain, distribution, wheel) -> bool:
     """Whether the contact takes the closed-form rule: a rigid rim on a law that offers
     closed forms of its rim integrals (`AbstractTerrain.closed_form_rim`: `WongSnow`, a
-    `Rut` on it) on the front region, running straight or at a slip angle."""
+    `Rut` on it, `LayeredSnow`) on the front region, running straight or at a slip
+    angle."""
     # Unbound calls: an equinox bound method costs ~40 us to create (every eager call).
     closed = type(terrain).closed_form_rim(terrain)
     return closed and _is_front(distribution) and _plain_rim(wheel)
@@ -101,6 +107,26 @@ def _kinked(terrain) -> bool:
     """Whether a law with closed forms has a kink (static: its class overrides
     `breakpoint_sinkages`; a `Rut`'s reloading line meets the virgin law at d)."""
     return type(terrain).breakpoint_sinkages is not AbstractTerrain.breakpoint_sinkages
+
+
+def _kink_scale(kink, diameter, terrain):
+    """The angle [rad] over which the stress changes its slope on the shallow side of a
+    law's one breakpoint z_b, at rim angle `kink`: the sinkage scale zeta = |sigma' /
+    sigma''| of the law just above z_b (z_w Z_f for a Wong layer whose Z falls to Z_f
+    there: the distance to its asymptote) carried onto the rim, r sin(kink) delta + r
+    delta^2 / 2 = zeta."""
+    (z_b,) = terrain.breakpoint_sinkages()
+    z = z_b * (1 - 16 * jnp.finfo(kink.dtype).eps)
+    one = jnp.ones_like(z)
+
+    def slope(z):
+        return jax.jvp(lambda z: terrain.pressure(z, None), (z,), (one,))[1]
+
+    first, second = jax.jvp(slope, (z,), (one,))
+    zeta = jnp.abs(first / jnp.where(second != 0, second, jnp.finfo(kink.dtype).tiny))
+    ratio = 2 * zeta / (diameter / 2)
+    sin = jnp.sin(kink)
+    return ratio / (sin + jnp.sqrt(sin**2 + ratio))
 
 
 def _strength_varies(terrain) -> bool:
@@ -156,7 +182,10 @@ def _nodes(
     of its variable): the four panels' nodes on [0, tau] (on all of a panel that does
     not hold the kink) and one more set on [tau, 1] of the panel that does, with the
     most nodes of a panel (zero weights where none does; under vmap each element's own
-    panel).  Each piece is (nodes, lo, hi, lo at the kink, hi at the kink).
+    panel).  Each piece is (nodes, lo, hi, lo at the kink, hi at the kink).  `jumps`
+    (static; a law whose pressure drops at the kink): driving, three panels, [0, kink]
+    quadratic, [kink, m] sinh towards the kink at `_kink_scale`, [m, theta0] sinh
+    towards the entry, m midway between the kink and theta0.
     """
     theta0, slip, diameter, terrain, z0_rel, kinks, scales = jax.lax.stop_gradient(
         (theta0, slip, diameter, terrain, z0_rel, kinks, scales)
@@ -176,24 +205,28 @@ def _nodes(
         # its distance from the entry: towards a kink next to the entry (the layer's
         # tail), nearly uniform below theta0 / 2.  A kink at the entry (a rut of zero
         # depth) leaves the last panel empty and the others those of the two-panel rule.
-        x2, w2 = _graded_or_empty(t, w, low, high, entry_scale + (theta0 - high), 0.0)
-        at_low, no = kink <= half, jnp.zeros_like(theta0, bool)
-        first = ((n, zero, low, no, at_low), (n, low, high, at_low, ~at_low))
-        if not jumps:
-            x3, w3 = _graded_or_empty(t, w, high, theta0, entry_scale, half)
-            pieces = (*first, (n, high, theta0, ~at_low, no))
-            x, jac = [low * u, x2, x3], [low * du, w2, w3]
+        no, yes = jnp.zeros_like(theta0, bool), jnp.ones_like(theta0, bool)
+        if jumps:
+            # A law that drops at its breakpoint (`LayeredSnow`): its stress is largest,
+            # and steepest, on the kink's shallow side, where the law before the drop
+            # may near its own asymptote.  Three panels: the axle's to the kink, one
+            # graded towards the kink at that law's own scale there (`_kink_scale`),
+            # one towards the entry.
+            mid = 0.5 * (kink + theta0)
+            scale = _kink_scale(kink, diameter, terrain)
+            x2, w2 = _sinh_panel(t, w, kink, mid, scale, False)
+            x3, w3 = _sinh_panel(t, w, mid, theta0, entry_scale, True)
+            pieces = ((n, zero, kink, no, yes), (n, kink, mid, yes, no), (n, mid, theta0, no, no))
+            x, jac = [kink * u, x2, x3], [kink * du, w2, w3]
             return jnp.concatenate(x), jnp.concatenate(jac), pieces
-        # A law that drops at its breakpoint (`LayeredSnow`) has its largest stress on
-        # the kink's shallow side, at the last panel's far end from the entry: that
-        # panel is cut at its middle, the half next to the kink graded only at its own
-        # length (nearly uniform), the other towards the entry.
-        mid = 0.5 * (high + theta0)
-        x3, w3 = _graded_or_empty(t, w, high, mid, entry_scale + (mid - high), half)
-        x4, w4 = _graded_or_empty(t, w, mid, theta0, entry_scale, half)
-        pieces = (*first, (n, high, mid, ~at_low, no), (n, mid, theta0, no, no))
-        x, jac = [low * u, x2, x3, x4], [low * du, w2, w3, w4]
-        return jnp.concatenate(x), jnp.concatenate(jac), pieces
+        x2, w2 = _graded_or_empty(t, w, low, high, entry_scale + (theta0 - high), 0.0)
+        x3, w3 = _graded_or_empty(t, w, high, theta0, entry_scale, half)
+        at_low = kink <= half
+        pieces = (
+            (n, zero, low, no, at_low), (n, low, high, at_low, ~at_low),
+            (n, high, theta0, ~at_low, no),
+        )  # fmt: skip
+        return jnp.concatenate([low * u, x2, x3]), jnp.concatenate([low * du, w2, w3]), pieces
     b1, split, b3, scale2, scale3, scale4 = law.braking_panels(
         theta0, slip, diameter, terrain, z0_rel, entry_scale, lateral_rate
     )
@@ -636,17 +669,21 @@ class FallingFrontRimRule(FrontRimRule):
     """The closed-form rule on a law whose pressure can fall at its breakpoint
     (`LayeredSnow`, where the ice breaks), running straight or at a slip angle.
 
-    A batch without braked elements takes `FrontRimRule`'s driving layout, three panels
-    cut at the kink (the breakpoint's angle), with the panel beyond the kink cut once
-    more (`_nodes`, `jumps`): the largest stress sits on the kink's shallow side, at the
-    far end of a panel graded towards the entry.  Against the any-terrain rule at 40
-    nodes per half-panel, on 600 entry angles of `LayeredSnow.ice_layer_example` with K
-    2 mm, 1 cm and 3 cm (slips 0-0.9): within 5.8e-9 of W (any-terrain default 8.6e-7
-    at K = 2 mm), where the three panels alone erred by 2.4e-5.  A layout with braked
-    elements takes the any-terrain rule (`general_contact` at the law's
-    `nodes_any_terrain`): the four-panel layout cut at the kink erred by 1.1e-6 of W at
-    K = 1 cm.  The cold start is the any-terrain rule's on such a law
-    (`general._falling_law_start`: W at a few entry angles, then secant steps towards
+    A batch without braked elements takes three panels (`_nodes`, `jumps`): the axle's
+    to the kink (the breakpoint's angle), one graded towards the kink at the scale of
+    the law just before its drop (`_kink_scale`: its largest and steepest stress sits
+    on the kink's shallow side, next to the top layer's own asymptote where the ice is
+    strong), one towards the entry.  Against the any-terrain rule at 40 nodes per
+    half-panel, on 600 entry angles of `LayeredSnow.ice_layer_example` with K 2 mm, 1 cm
+    and 3 cm (slips 0-0.9): within 3.3e-8 of W and 4.9e-8 in R, T, M (any-terrain
+    default 8.6e-7 at K = 2 mm), where `FrontRimRule`'s driving layout, cut at the kink
+    and graded towards the entry, erred by 2.4e-5; over 4,000 random crusts (p_f 1-20
+    top.p_w, K 2-30 mm, 0.2-3 kN, slips 0-0.9) the equilibrium sinkage within 4.0e-6 of
+    that reference (its default: 4.5e-6), where a uniform panel next to the kink erred
+    by 2.7e-4.  A layout with braked elements takes the any-terrain rule
+    (`general_contact` at the law's `nodes_any_terrain`): the four-panel layout cut at
+    the kink erred by 1.1e-6 of W at K = 1 cm.  The cold start is the any-terrain rule's
+    on such a law (`general._falling_law_start`: W at a few entry angles, then secant steps towards
     the shallowest equilibrium)."""
 
     def law_nodes(self, law) -> tuple:

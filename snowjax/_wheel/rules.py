@@ -3,11 +3,12 @@
 One integrator, `general.py`'s any-terrain rule (`AnyTerrainRule`), takes every wheel,
 terrain, stress distribution, shear law, slip angle and force term.  A terrain law may
 offer closed forms of its rim integrals (`AbstractTerrain.front_rim_integrals`: Wong's
-law, and a `Rut` on it); on the front region of a rigid rim, running straight or at a
-slip angle, the solver then takes the accelerations they allow, which live in one
-module, `front_rim.py` (`FrontRimRule`: the log singularity at a bottomed axle
+law, a `Rut` on it, layered snow); on the front region of a rigid rim, running straight
+or at a slip angle, the solver then takes the accelerations they allow, which live in
+one module, `front_rim.py` (`FrontRimRule`: the log singularity at a bottomed axle
 subtracted in closed form, panels placed by the shear law, a closed-form start; at a
-slip angle `SteeredRimRule`, the same with one node layout in a warm-started solve).
+slip angle `SteeredRimRule`, the same with one node layout in a warm-started solve; on
+a law that can fall, `FallingFrontRimRule`, driven batches only).
 `front_rim._contact_rule` makes that choice, in one place; the solver
 (`equilibrium.py`) and the quadrature's entry (`contact._contact_batch`) take the rule
 it returns and never ask which it is.
