@@ -200,11 +200,6 @@ def _nodes(
             x2, w2 = _sinh_panel(t, w, half, theta0, entry_scale, True)
             return jnp.concatenate([half * u, x2]), jnp.concatenate([half * du, w2]), ()
         (kink,) = kinks
-        low, high = jnp.minimum(kink, half), jnp.maximum(kink, half)
-        # The middle panel clusters towards its upper end at the entry layer's width plus
-        # its distance from the entry: towards a kink next to the entry (the layer's
-        # tail), nearly uniform below theta0 / 2.  A kink at the entry (a rut of zero
-        # depth) leaves the last panel empty and the others those of the two-panel rule.
         no, yes = jnp.zeros_like(theta0, bool), jnp.ones_like(theta0, bool)
         if jumps:
             # A law that drops at its breakpoint (`LayeredSnow`): its stress is largest,
@@ -219,6 +214,11 @@ def _nodes(
             pieces = ((n, zero, kink, no, yes), (n, kink, mid, yes, no), (n, mid, theta0, no, no))
             x, jac = [kink * u, x2, x3], [kink * du, w2, w3]
             return jnp.concatenate(x), jnp.concatenate(jac), pieces
+        low, high = jnp.minimum(kink, half), jnp.maximum(kink, half)
+        # The middle panel clusters towards its upper end at the entry layer's width plus
+        # its distance from the entry: towards a kink next to the entry (the layer's
+        # tail), nearly uniform below theta0 / 2.  A kink at the entry (a rut of zero
+        # depth) leaves the last panel empty and the others those of the two-panel rule.
         x2, w2 = _graded_or_empty(t, w, low, high, entry_scale + (theta0 - high), 0.0)
         x3, w3 = _graded_or_empty(t, w, high, theta0, entry_scale, half)
         at_low = kink <= half
