@@ -640,3 +640,25 @@ def test_wong_front_rim_integrals_match_adaptive_quadrature(theta0, clearance_fr
     np.testing.assert_allclose(
         snow.pressure_at_clearance(height), snow.pressure(snow.z_w - height), rtol=1e-9
     )
+
+
+def test_float32_driven_layered_snow_has_no_nan():
+    """Driven layered snow in float32 takes the closed-form rule; a strong crust (p_f up
+    to 20 top.p_w, where the top layer's Z falls to e^-20 before the ice breaks) once
+    left its closed forms no digit and its drawbar pull NaN."""
+    rng = np.random.default_rng(4)
+    n = 400
+    f32 = lambda x: jnp.asarray(x, jnp.float32)  # noqa: E731
+    zw1 = rng.uniform(0.05, 0.15, n)
+    top = sj.WongSnow(f32(rng.uniform(10e3, 60e3, n)), f32(zw1), 3e3, 0.3, f32(0.01))
+    bottom = sj.WongSnow(
+        f32(rng.uniform(10e3, 60e3, n)), f32(zw1 + rng.uniform(0.02, 0.2, n)), 3e3, 0.3, 0.01
+    )
+    snow = sj.LayeredSnow(top, bottom, top.p_w * f32(rng.uniform(1.0, 20.0, n)))
+    st = sj.solve_wheel(
+        sj.RigidWheel(0.736, 0.235), snow, f32(rng.uniform(200, 3000, n)),
+        f32(rng.uniform(0.0, 0.9, n)),
+    )  # fmt: skip
+    assert st.sinkage.dtype == jnp.float32
+    for field in ("sinkage", "drawbar_pull", "torque", "motion_resistance"):
+        assert np.all(np.isfinite(np.asarray(getattr(st, field)))), field
