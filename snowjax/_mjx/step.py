@@ -5,6 +5,8 @@ wheels, and a scan of it (the module documentation of `snowjax.mjx` explains the
 
 from __future__ import annotations
 
+import functools
+
 import equinox as eqx
 import jax
 import jax.numpy as jnp
@@ -22,6 +24,7 @@ from .._sim.vehicle import (
 from .._terrain.base import Terrain
 from .._terrain.rut import Rut
 from .._terrain.rut_map import RutMap
+from .._wheel.batchwide import _vmapped_in_chunks
 from .._wheel.equilibrium import Status, _check_model
 from .._wheel.model import ContactModel, _takes_model, _with_terrain
 from .._wheel.passes import (
@@ -148,6 +151,21 @@ def _wheel_plane(d, wheels, vx, spin, heading, axle, velocity):
     )
 
 
+class _ReadRuts(eqx.Module):
+    """The wheels on the ruts read from a `RutMap` (`_MapGround`): each on the `Rut` of
+    the depth it `seen` [m], with the map's k_0 [Pa/m] and a_u [Pa/m^2]."""
+
+    k_0: Float[ArrayLike, ""]
+    a_u: Float[ArrayLike, ""]
+
+    def _rut(self, terrain, width, seen) -> Rut:
+        return Rut(terrain, seen, width, self.k_0, self.a_u)
+
+    def _solve(self, contact, width, seen, solve):
+        rut = self._rut(contact.terrain, width, seen)
+        return solve(_with_terrain(contact, rut), lambda x: x)[0]
+
+
 class _MapGround(eqx.Module):
     """The ground of `step(ruts=RutMap)`: every wheel on the `Rut` its `RutMap` holds
     ahead of it (the `_VirginGround` / `Ruts` interface of `snowjax._wheel.passes`, with
@@ -163,21 +181,43 @@ class _MapGround(eqx.Module):
     def _overlap(self, plane: _WheelPlane) -> Array:
         return plane.read(self.rut_map, self.lookahead)
 
-    def _rut(self, terrain, width, seen) -> Rut:
-        return Rut(terrain, seen, width, self.rut_map.k_0, self.rut_map.a_u)
+    def _solving(self) -> _ReadRuts:
+        """What `_solve` needs (not the map, which chunks of a vmapped batch would copy)."""
+        return _ReadRuts(self.rut_map.k_0, self.rut_map.a_u)
 
     def _solve(self, contact, width, seen, solve):
-        rut = self._rut(contact.terrain, width, seen)
-        return solve(_with_terrain(contact, rut), lambda x: x)[0]
+        return self._solving()._solve(contact, width, seen, solve)
 
     def _depths(self, terrain, width, seen, sinkage):
-        return seen, _left_behind(sinkage, self._rut(terrain, width, seen), seen)
+        rut = self._solving()._rut(terrain, width, seen)
+        return seen, _left_behind(sinkage, rut, seen)
 
     def mark(self, plane: _WheelPlane, dt, depth) -> RutMap:
         """The map after each wheel swept from `position - velocity dt` to `position`
         at `depth` [m] (`RutMap.mark`)."""
         start = plane.position - plane.velocity * dt
         return self.rut_map.mark(start, plane.position, plane.width, depth)
+
+
+def _forces_and_slopes(wheel, contact, load, u0, guess, ground, overlap, basis, *, speed_eps):
+    """(jac, `_FrameForces`) of wheels at u0 = (v_x, v_y, omega) (3, n): their forces
+    (drawbar pull, lateral force, -M_w, M_z) and those forces' tangents (jac, one per
+    row of `basis`, (rows, 4, n)); `ground` with what its `_solve` needs
+    (`_solving`)."""
+
+    def forces(u):
+        f = _frame_forces(
+            wheel, contact, load, u[0], u[1], u[2], speed_eps, guess, _WHEEL_MAX_STEPS,
+            ground, overlap,
+        )  # fmt: skip
+        out = (f.drawbar_pull, f.lateral_force, -f.resisting_torque, f.aligning_torque)
+        return jnp.stack(out), f
+
+    # Vmapping the jvp over the tangents traces (and runs) the equilibrium solves once.
+    _, jac, f = jax.vmap(
+        lambda t: jax.jvp(forces, (u0,), (t,), has_aux=True), out_axes=(None, 0, None)
+    )(basis)
+    return jac, f
 
 
 def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
@@ -203,25 +243,19 @@ def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
     follows = ground.layout(n)
     overlap = ground._overlap(plane)  # (the rut each wheel sees: fixed in the slopes)
 
-    def forces(u):
-        f = _frame_forces(
-            wheels.wheel, contact, solve_load, u[0], u[1], u[2], speed_eps, entry_angle,
-            _WHEEL_MAX_STEPS, ground, overlap,
-        )  # fmt: skip
-        out = (f.drawbar_pull, f.lateral_force, -f.resisting_torque, f.aligning_torque)
-        return jnp.stack(out), f
-
     # Each wheel's forces depend on its own (v_x, v_y, omega) and, in a rut, on its
     # leaders': three forward-mode tangents per level of wheels (leaders, their
-    # followers, ...) give the 4 x 3 block of every wheel at once.  Vmapping the jvp over
-    # the tangents traces (and runs) the equilibrium solves once.
+    # followers, ...) give the 4 x 3 block of every wheel at once.  Vmapped over
+    # environments, in chunks of environments (`_vmapped_in_chunks`).
     level = _levels(follows)
     masks = (level[None, :] == np.arange(level.max() + 1)[:, None]).astype(float)
     basis = np.einsum("ln,ij->lijn", masks, np.eye(3)).reshape(-1, 3, n)
     u0 = jnp.stack([vx, vy, spin])
-    _, jac, f = jax.vmap(
-        lambda t: jax.jvp(forces, (u0,), (t,), has_aux=True), out_axes=(None, 0, None)
-    )(jnp.asarray(basis, dtype))
+    slopes = _vmapped_in_chunks(functools.partial(_forces_and_slopes, speed_eps=speed_eps), n)
+    jac, f = slopes(
+        wheels.wheel, contact, solve_load, u0, entry_angle, ground._solving(), overlap,
+        jnp.asarray(basis, dtype),
+    )  # fmt: skip
     # jac[3 level + j, i, k]: d(output i of wheel k) / d(input j of wheel k's level).
     jac = jac.reshape(-1, 3, 4, n)[level, :, :, np.arange(n)]  # (n, 3 inputs, 4 outputs)
     damp = -jnp.swapaxes(jac, 1, 2)  # D = -d(F_x, F_y, -M_w, M_z)/d(v_x, v_y, omega)

@@ -40,7 +40,7 @@ from jaxtyping import Array, ArrayLike, Float, Int
 
 from .._leaves import _is_traced
 from .._terrain.base import Terrain, _half_angle_arc
-from .batchwide import _all_in_batch, _any_in_batch
+from .batchwide import _all_in_batch, _any_in_batch, _chunk_size
 from .bracketed import solve_elementwise
 from .contact import _broadcast_leaves, _contact_batch, _layout, _with_rule_for
 from .front_rim import _contact_rule
@@ -260,16 +260,10 @@ def _safe_inputs(valid, wheel, terrain, distribution, terms, load, slip):
     return wheel, terrain, distribution, terms, pick(load, 5000.0), pick(slip, 0.2)
 
 
-# Elements solved together in one Newton iteration.  On a CPU, chunks keep the
-# quadrature's (chunk, nodes) intermediates in cache and let each chunk stop iterating on
-# its own; an accelerator needs wide chunks to fill it (1 GB of intermediates in float64).
-CHUNK_SIZE = 2048
-ACCELERATOR_CHUNK_SIZE = 65536
-
-
 def _in_chunks(fn, args, size):
-    """`fn(args)` on 1-D leaves of length `size`, as `lax.map` over fixed-size chunks."""
-    chunk = CHUNK_SIZE if jax.default_backend() == "cpu" else ACCELERATOR_CHUNK_SIZE
+    """`fn(args)` on 1-D leaves of length `size`, as `lax.map` over fixed-size chunks
+    (`batchwide.CHUNK_SIZE` elements on a CPU: one Newton iteration each)."""
+    chunk = _chunk_size()
     if size <= chunk:
         return fn(args)
     n_chunks = -(-size // chunk)

@@ -173,6 +173,10 @@ class Ruts(eqx.Module):
         """Each wheel's overlap with its leader's rut: `overlap(follows)`."""
         return overlap(self.follows)
 
+    def _solving(self) -> Ruts:
+        """What `_solve` needs: all of it."""
+        return self
+
     def _solve(self, contact, width, overlap, solve):
         """The wheels solved level by level in the ruts of their leaders (`_in_tracks`;
         the layout resolved)."""
@@ -214,6 +218,10 @@ class _VirginGround(eqx.Module):
     def _overlap(self, overlap: Callable) -> Any:
         del overlap
         return 1.0
+
+    def _solving(self) -> _VirginGround:
+        """What `_solve` needs: all of it."""
+        return self
 
     def _solve(self, contact, width, overlap, solve):
         del width, overlap
