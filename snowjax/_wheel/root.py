@@ -7,8 +7,9 @@ entry angle (a deeper base allows a larger theta0) only through theta0 = `entry(
 cap)`, a closed form, and on the other parameters through the contact
 `forces(theta0, bottomed, element)`.  At first order, `_root_outputs` alone does the
 work: one tangent pass of the contact along theta0 and one along the parameters at fixed
-theta0 give W_theta and W_p, hence ds from dW = dF_z, and every output's total
-derivative (`jax.grad` transposes the parameter pass).  `_implicit_root` gives s its own
+theta0 (or one per parameter where at most two carry a tangent, `_along_parameters`)
+give W_theta and W_p, hence ds from dW = dF_z, and every output's total derivative
+(`jax.grad` transposes the parameter pass).  `_implicit_root` gives s its own
 tangent for second derivatives (differentiating `_root_outputs`'s rule again); at first
 order its computation is unused and XLA drops it.  `_along_theta0` is the pass along
 theta0 with the quadrature's nodes fixed; its own derivative (second order only) moves
