@@ -3,7 +3,9 @@ and the secant finds the Newton iteration's."""
 
 import jax
 import jax.numpy as jnp
+import lineax as lx
 import numpy as np
+import optimistix as optx
 import pytest
 
 from snowjax._wheel.bracketed import (
@@ -68,6 +70,36 @@ def test_a_large_batch_and_its_single_group_slices_agree():
     )
     assert np.all(np.abs(np.asarray(_residual(whole, params))) <= TOL)
     np.testing.assert_allclose(sliced, whole, rtol=1e-12, atol=1e-12)
+
+
+def test_the_first_phase_ends_once_its_stragglers_fit_in_one_group():
+    """`until_left` ends a solve once at most that many elements are unfinished
+    (`solve_elementwise`'s first phase, whose stragglers continue in a group of
+    `STRAGGLERS`): on 4 x STRAGGLERS elements, all but 40 linear (finished after two
+    Newton steps), the solve with `until_left=STRAGGLERS` stops after those two steps,
+    successful, with the 40 unfinished, where the whole solve takes more steps; and
+    `solve_elementwise` ends every element on the root the whole solve finds."""
+    n, hard = 4 * STRAGGLERS, 40
+    a, b, c = _params(n)
+    b = np.where(np.arange(n) < hard, np.maximum(b, 0.9), 0.0)  # f = a - y elsewhere
+    c = np.where(np.arange(n) < hard, np.maximum(c, 4.0), c)
+    params = (a, b, c)
+    y0, options = jnp.full(n, 5.0), dict(lower=jnp.zeros(n), upper=jnp.full(n, 10.0))
+
+    def root_find(until_left):
+        return optx.root_find(
+            _residual, BracketedNewton(rtol=TOL, atol=TOL, until_left=until_left), y0,
+            args=params, options=options, max_steps=64, throw=False,
+            tags=frozenset({lx.diagonal_tag}),
+        )  # fmt: skip
+
+    first, whole = root_find(STRAGGLERS), root_find(0)
+    assert int(first.stats["num_steps"]) == 2 < int(whole.stats["num_steps"])
+    assert first.result == optx.RESULTS.successful
+    unfinished = ~np.asarray(first.state.converged | first.state.collapsed)
+    assert 0 < unfinished.sum() <= STRAGGLERS and not unfinished[hard:].any()
+    assert np.all(np.asarray(whole.state.converged))
+    np.testing.assert_allclose(np.asarray(_solve(params)), np.asarray(whole.value), rtol=1e-12)
 
 
 def test_an_element_ends_where_it_finished_whatever_its_batch():

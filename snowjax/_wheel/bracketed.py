@@ -63,6 +63,10 @@ class BracketedNewton(optx.AbstractRootFinder):
 
     rtol: float
     atol: float
+    # The solve also ends once at most this many elements are unfinished (static; 0:
+    # when every one is), for a first phase whose stragglers continue on their own
+    # (`solve_elementwise`).
+    until_left: int = eqx.field(default=0, static=True)
     # Required by optimistix's solver interface; the tests here are elementwise
     # (`_finished`), so the norm only reports |f| in optimistix's own diagnostics.
     norm: ClassVar[Callable] = optx.max_norm
@@ -102,7 +106,7 @@ class BracketedNewton(optx.AbstractRootFinder):
         (optimistix stops iterating at the first result that is not `successful`, so an
         unfinished solve must report success.)"""
         del fn, args, options, tags
-        return _terminate(state)
+        return _terminate(state, self.until_left)
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         del fn, args, options, state, tags, result
@@ -115,11 +119,17 @@ QUADRATIC_REGIME = 1e-3
 PREDICTION_MARGIN = 0.1
 
 
-def _terminate(state) -> tuple[Array, optx.RESULTS]:
+def _terminate(state, until_left: int = 0) -> tuple[Array, optx.RESULTS]:
     """(finished, result) of a bracketed solve: finished where every element converged or
-    collapsed; `nonlinear_divergence` where then some element did not converge."""
-    finished: Bool[Array, ""] = jnp.all(state.converged | state.collapsed)
-    failed = finished & ~jnp.all(state.converged)
+    collapsed, or where at most `until_left` have not (a first phase, whose stragglers
+    continue on their own: then `successful`); `nonlinear_divergence` where every
+    element finished and some did not converge."""
+    unfinished = ~(state.converged | state.collapsed)
+    every: Bool[Array, ""] = ~jnp.any(unfinished)
+    finished = every
+    if until_left:
+        finished = every | (jnp.sum(unfinished) <= until_left)
+    failed = every & ~jnp.all(state.converged)
     result = optx.RESULTS.where(failed, optx.RESULTS.nonlinear_divergence, optx.RESULTS.successful)
     return finished, result
 
@@ -193,6 +203,8 @@ class BracketedSecant(optx.AbstractRootFinder):
 
     rtol: float
     atol: float
+    # As `BracketedNewton.until_left`.
+    until_left: int = eqx.field(default=0, static=True)
     norm: ClassVar[Callable] = optx.max_norm
 
     def init(self, fn, y, args, options, f_struct, aux_struct, tags) -> _SecantState:
@@ -257,7 +269,7 @@ class BracketedSecant(optx.AbstractRootFinder):
     def terminate(self, fn, y, args, options, state: _SecantState, tags):
         """As `BracketedNewton.terminate`."""
         del fn, args, options, tags
-        return _terminate(state)
+        return _terminate(state, self.until_left)
 
     def postprocess(self, fn, y, aux, args, options, state, tags, result):
         del fn, args, options, state, tags, result
@@ -283,8 +295,9 @@ def _secant_finished(previous, state, y, atol, rtol) -> tuple[Array, Array]:
     return converged, collapsed
 
 
-# Newton steps every element of a batch takes together; elements still unconverged then
-# (a braked wheel whose W(theta0) is not monotone, a poor initial guess) continue alone.
+# The most steps every element of a batch takes together; elements still unconverged
+# then (a braked wheel whose W(theta0) is not monotone, a poor initial guess) continue
+# alone, as they do once they fit in one group of STRAGGLERS.
 FIRST_PHASE_STEPS = 5
 # Such stragglers are gathered into small batches of this many and solved one batch
 # after the other.
@@ -297,9 +310,12 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
 
     A batched iteration runs until its slowest element converges, so one straggler
     would make every element of the batch pay for its extra steps.  All elements
-    take `FIRST_PHASE_STEPS` steps together; the (few) unconverged ones are then gathered
-    in groups of `STRAGGLERS`, solved on their own from where they stopped, and scattered
-    back.  A batch of at most `STRAGGLERS` elements is one such group from the start: one
+    take up to `FIRST_PHASE_STEPS` steps together, fewer where the unconverged ones fit
+    in one group before; those are then gathered in groups of `STRAGGLERS`, solved on
+    their own from where they stopped, and scattered back (a rim in a rut on Wong snow:
+    a few elements per 2,048 whose root lies just past the rut's kink, where Newton
+    converges linearly for a step, took every element of their chunk through a third
+    step).  A batch of at most `STRAGGLERS` elements is one such group from the start: one
     solve of `max_steps` (one compiled loop instead of two; its elements that finish
     early stay where they finished while the last one iterates).  Forward-mode
     derivatives w.r.t. `params` come from each `optx.root_find`'s implicit adjoint;
@@ -313,13 +329,13 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
     shaped like y0: `slope` and any of `f_lower`, `f_upper`, `x_last`, `f_last`).
     **Returns:** y, shape of y0.
     """
-    solver = BracketedSecant(rtol=tol, atol=tol) if secant else BracketedNewton(rtol=tol, atol=tol)
+    kind = BracketedSecant if secant else BracketedNewton
     tags = frozenset({lx.diagonal_tag})
 
-    def solve(y_start, options, p, steps):
+    def solve(y_start, options, p, steps, until_left=0):
         return optx.root_find(
             residual,
-            solver,
+            kind(rtol=tol, atol=tol, until_left=until_left),
             y_start,
             args=p,
             options=jax.lax.stop_gradient(options),
@@ -333,10 +349,11 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
     if size <= STRAGGLERS:
         # One group holds the whole batch: one solve, one compiled loop.
         return solve(y0, options, params, max_steps).value
-    first = solve(y0, options, params, min(FIRST_PHASE_STEPS, max_steps))
     rest = max_steps - FIRST_PHASE_STEPS
     if rest <= 0:
-        return first.value
+        return solve(y0, options, params, max_steps).value
+    # The first phase ends where its stragglers fit in one group.
+    first = solve(y0, options, params, FIRST_PHASE_STEPS, STRAGGLERS)
     y, state = first.value, first.state
     left = ~(state.converged | state.collapsed)
     m = STRAGGLERS
