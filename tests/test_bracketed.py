@@ -37,7 +37,7 @@ def _solve(params):
     n = params[0].shape[0]
     lower, upper = jnp.zeros(n), jnp.full(n, 10.0)
     start = jnp.full(n, 5.0)
-    return solve_elementwise(_residual, start, lower, upper, params, TOL, 64)
+    return solve_elementwise(_residual, start, lower, upper, params, TOL, 64)[0]
 
 
 @jax.jit
@@ -47,7 +47,7 @@ def _solve_secant(params):
     # The secant's first step takes this slope of f in y^2 (f' = -1 - b c cos(c y) at
     # y = 5: the guess -1 / (2 y) ignores the sine).
     secant = dict(slope=jnp.full(n, -0.1))
-    return solve_elementwise(_residual, jnp.full(n, 5.0), lower, upper, params, TOL, 64, secant)
+    return solve_elementwise(_residual, jnp.full(n, 5.0), lower, upper, params, TOL, 64, secant)[0]
 
 
 def test_a_large_batch_and_its_single_group_slices_agree():
@@ -58,7 +58,9 @@ def test_a_large_batch_and_its_single_group_slices_agree():
     n = 3 * STRAGGLERS + 8
     params = _params(n)
     bracket = (jnp.zeros(n), jnp.full(n, 10.0))
-    early = solve_elementwise(_residual, jnp.full(n, 5.0), *bracket, params, TOL, FIRST_PHASE_STEPS)
+    early = solve_elementwise(
+        _residual, jnp.full(n, 5.0), *bracket, params, TOL, FIRST_PHASE_STEPS
+    )[0]
     stragglers = np.abs(np.asarray(_residual(early, params))) > TOL
     assert stragglers.sum() > STRAGGLERS  # more than one group of them
     whole = np.asarray(_solve(params))
@@ -100,6 +102,35 @@ def test_the_first_phase_ends_once_its_stragglers_fit_in_one_group():
     assert 0 < unfinished.sum() <= STRAGGLERS and not unfinished[hard:].any()
     assert np.all(np.asarray(whole.state.converged))
     np.testing.assert_allclose(np.asarray(_solve(params)), np.asarray(whole.value), rtol=1e-12)
+
+
+@pytest.mark.parametrize("secant", [False, True])
+def test_the_residual_returned_is_the_one_at_the_root_where_it_was_evaluated_there(secant):
+    """`solve_elementwise`'s second output, f at y where the last step evaluated it there
+    (`solve_wheel` takes a layer's capacity from it where an element collapsed onto the
+    deep end of its bracket, where the secant steps go): on 3 x STRAGGLERS + 8 elements,
+    20 of them with f < 0 on the whole bracket (no root, as for a load beyond the
+    layer's capacity), the secant's end on its lower end with f finite there, Newton's
+    within the tolerance of it; wherever f is finite it equals the residual at y
+    (stragglers included)."""
+    n = 3 * STRAGGLERS + 8
+    a, b, c = _params(n)
+    a = np.where(np.arange(n) < 20, -0.5, a)  # f(0) = a < 0
+    params = (a, b, c)
+    bracket = (jnp.zeros(n), jnp.full(n, 10.0))
+    options = dict(slope=jnp.full(n, -0.1)) if secant else None
+    y, f = jax.jit(solve_elementwise, static_argnums=(0, 5, 6))(
+        _residual, jnp.full(n, 5.0), *bracket, params, TOL, 64, options
+    )
+    y, f = np.asarray(y), np.asarray(f)
+    exact = np.asarray(_residual(jnp.asarray(y), params))
+    if secant:
+        assert np.all(y[:20] == 0.0) and np.all(np.isfinite(f[:20]))
+    else:
+        assert np.all(y[:20] <= 2 * TOL)
+    finite = np.isfinite(f)
+    np.testing.assert_array_equal(f[finite], exact[finite])
+    assert np.all(np.abs(exact[20:]) <= TOL)
 
 
 def test_an_element_ends_where_it_finished_whatever_its_batch():

@@ -327,7 +327,8 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
     the batch on axis 0), `tol` (absolute, on f and on the step), `max_steps` (total),
     `secant` (None: Newton; else a dict of `BracketedSecant`'s other options, arrays
     shaped like y0: `slope` and any of `f_lower`, `f_upper`, `x_last`, `f_last`).
-    **Returns:** y, shape of y0.
+    **Returns:** (y, f): y, shape of y0, and the residual there where the solver's last
+    evaluation was at y (`_value_and_residual`; NaN elsewhere; no derivative).
     """
     kind = BracketedSecant if secant else BracketedNewton
     tags = frozenset({lx.diagonal_tag})
@@ -346,15 +347,15 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
 
     options = dict(lower=lower, upper=upper, **(secant or {}))
     size = y0.shape[0]
-    if size <= STRAGGLERS:
-        # One group holds the whole batch: one solve, one compiled loop.
-        return solve(y0, options, params, max_steps).value
+    if size <= STRAGGLERS or max_steps <= FIRST_PHASE_STEPS:
+        # One group holds the whole batch (one solve, one compiled loop), or no steps
+        # are left for the stragglers.
+        return _value_and_residual(solve(y0, options, params, max_steps))
     rest = max_steps - FIRST_PHASE_STEPS
-    if rest <= 0:
-        return solve(y0, options, params, max_steps).value
     # The first phase ends where its stragglers fit in one group.
     first = solve(y0, options, params, FIRST_PHASE_STEPS, STRAGGLERS)
-    y, state = first.value, first.state
+    y, f = _value_and_residual(first)
+    state = first.state
     left = ~(state.converged | state.collapsed)
     m = STRAGGLERS
     # Where the stragglers continue from: their brackets (and, for the secant, what it
@@ -368,7 +369,7 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
         # Up to m stragglers gathered, solved from where they stopped, scattered back.
         # Slots beyond them hold index `size`: gathered as the last element (any valid
         # input), dropped when scattering back.
-        y, left = carry
+        y, f, left = carry
         idx = jnp.nonzero(left, size=m, fill_value=size)[0]
         pick = lambda x: jnp.take(x, idx, axis=0, mode="clip")  # noqa: E731
         sub = solve(
@@ -377,9 +378,20 @@ def solve_elementwise(residual, y0, lower, upper, params, tol, max_steps, secant
             jax.tree_util.tree_map(pick, params),
             rest,
         )
-        return y.at[idx].set(sub.value, mode="drop"), left.at[idx].set(False, mode="drop")
+        y_sub, f_sub = _value_and_residual(sub)
+        scatter = lambda x, new: x.at[idx].set(new, mode="drop")  # noqa: E731
+        return scatter(y, y_sub), scatter(f, f_sub), scatter(left, False)
 
     # One group at a time (none, usually): one compiled solve of m elements serves any
     # number of stragglers.
-    y, _ = jax.lax.while_loop(lambda carry: jnp.any(carry[1]), next_group, (y, left))
-    return y
+    y, f, _ = jax.lax.while_loop(lambda carry: jnp.any(carry[2]), next_group, (y, f, left))
+    return y, f
+
+
+def _value_and_residual(solution) -> tuple[Array, Array]:
+    """(y, f(y)) of a bracketed solve: the residual at y where its last step evaluated
+    it there (an element that ended where it stood: finished earlier, or collapsed onto
+    the point just evaluated), NaN where the last step moved it."""
+    state = solution.state
+    f = state.f_last if isinstance(state, _SecantState) else state.f
+    return solution.value, jnp.where(state.diff == 0, jax.lax.stop_gradient(f), jnp.nan)

@@ -198,7 +198,7 @@ def _solve_layout(
     # the closed-form start divides by its cap) would stop the whole batch's iteration:
     # such an element starts at its bracket's shallow end.
     s0 = jnp.where(jnp.isfinite(s0), s0, upper)
-    s = solve_elementwise(
+    s, f_end = solve_elementwise(
         residual,
         jnp.clip(s0, lower, upper),
         lower,
@@ -210,14 +210,17 @@ def _solve_layout(
     )
     if secant:
         # The power-law start holds no element at the cap: one that ended on it is
-        # beyond the layer's capacity where W there falls short of the load (W at the
-        # cap is evaluated only where some element ended there).  A scan start's
-        # elements held at the cap stay held.
+        # beyond the layer's capacity where W there falls short of the load.  W at the
+        # cap is target exp(f) where the solver's last evaluation was there (an element
+        # whose bracket collapsed onto the cap), else evaluated, only where some element
+        # needs it.  A scan start's elements held at the cap stay held.
         at_cap = (s <= lower) & ~over
+        known = jnp.isfinite(f_end)
+        seen = jnp.where(known, target * jnp.exp(jnp.where(known, f_end, 0.0)), jnp.inf)
         capacity = jax.lax.cond(
-            _any_in_batch(at_cap),
-            lambda: vertical(_theta_from_s(lower, theta_cap)),
-            lambda: jnp.full_like(load, jnp.inf),
+            _any_in_batch(at_cap & ~known),
+            lambda: jnp.where(known, seen, vertical(_theta_from_s(lower, theta_cap))),
+            lambda: seen,
         )
         newly = at_cap & (load >= capacity)
         over = over | newly
