@@ -224,9 +224,10 @@ def _power_law_start(theta_cap, load, slip, wheel, terrain, distribution):
     error on 64 random cases 0.24 -> 0.35), the secant's first slope d ln W / d s^2 =
     -m from its exponent, and the whole range [s_min, S_MAX] as the bracket.
 
-    No element is held at the cap: the layer's capacity is evaluated after the solve,
-    only where an element ended on the cap (`equilibrium._solve_layout`; the secant
-    steps take the cap where they would pass it).  Measured on the thesis tyre, 1-9 kN
+    No element is held at the cap: an element that ends on the cap is beyond the
+    layer's capacity where W there, which the secant's last step evaluated (the steps
+    take the cap where they would pass it, and the bracket collapses onto it), falls
+    short of the load (`equilibrium._solve_layout`).  Measured on the thesis tyre, 1-9 kN
     (Bekker's snow / 9, Reece's sand / 4), slips -0.3 to 0.9, front region and
     Wong–Reece: the secant steps reach |ln(W / F_z)| < 1e-10 in 3-7 evaluations of W
     (Reece's sand with Wong–Reece 3, 5 without the rear factor; Bekker's snow 4; Wong
