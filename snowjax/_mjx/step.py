@@ -213,11 +213,13 @@ def _forces_and_slopes(wheel, contact, load, u0, guess, ground, overlap, basis, 
         out = (f.drawbar_pull, f.lateral_force, -f.resisting_torque, f.aligning_torque)
         return jnp.stack(out), f
 
-    # Vmapping the jvp over the tangents traces (and runs) the equilibrium solves once.
-    _, jac, f = jax.vmap(
-        lambda t: jax.jvp(forces, (u0,), (t,), has_aux=True), out_axes=(None, 0, None)
-    )(basis)
-    return jac, f
+    # One linearisation (the equilibrium solves run once), its tangents one after the
+    # other: a vmap of the JVP over the tangents ran them at once, on arrays of
+    # (tangents, wheels, nodes) (the rover in MJX, 1,024 environments, 2 cores, two
+    # interleaved runs: the step with snow 37.9-40.5 -> 35.9-36.3 ms, at the simulator
+    # accuracy 33.3-37.6 -> 33.1-33.9 ms, the same rollouts; compile 34-36 -> 29-31 s).
+    _, linear, f = jax.linearize(forces, u0, has_aux=True)
+    return jax.lax.map(linear, basis), f
 
 
 def _snow_forces(m, d, wheels, contact, entry_angle, load, speed_eps, ground):
