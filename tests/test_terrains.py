@@ -431,6 +431,33 @@ def test_layered_wheel_breaks_through_the_ice_and_takes_the_shallowest_equilibri
     assert float(heavy.sinkage) > float(st.sinkage) + 0.03
 
 
+def test_layered_driven_start_finds_the_shallowest_root_the_shear_alone_carries():
+    """A driven rim's cold start on a crust takes the law's closed-form no-shear load and
+    evaluates W only where that cannot decide (`front_rim._falling_closed_form_start`).
+    A load between the no-shear W and W at the crust's peak is carried before the ice
+    breaks only by the shear stress: the solver must return that shallow root (SciPy's
+    shallowest), not the deeper one past the drop."""
+    top = sj.WongSnow(20e3, 0.08, 1e3, 0.3, 0.01)
+    bottom = sj.WongSnow(5e3, 0.30, 1e3, 0.3, 0.01)
+    snow = sj.LayeredSnow(top, bottom, 60e3)
+    wheel, slip = sj.RigidWheel(0.736, 0.235), 0.6
+    peak = 2 * math.asin(math.sqrt(float(snow.failure_sinkage) / 0.736)) * (1 - 1e-9)
+    w_peak = float(sj.contact_forces(wheel, snow, peak, slip).vertical_load)
+    no_shear = sj.ContactModel(snow, shear="none")
+    w_no_shear = float(sj.contact_forces(wheel, no_shear, peak, slip).vertical_load)
+    assert w_no_shear < 0.95 * w_peak  # the shear carries a share of it
+    load = 0.5 * (w_no_shear + w_peak)
+    st = sj.solve_wheel(wheel, snow, np.array([load, 0.5 * w_no_shear]), np.full(2, slip))
+    assert list(np.asarray(st.status)) == [Status.CONVERGED] * 2
+    law, z_f = _ref_law(snow)
+    for k, w in enumerate((load, 0.5 * w_no_shear)):
+        theta0, _ = ref.solve(
+            w, slip, 0.736, 0.235, law, 1e3, 0.3, 0.01, z_f=z_f, depth=0.3, shallowest=True
+        )
+        assert float(st.entry_angle[k]) == pytest.approx(theta0, rel=1e-7)
+    assert float(st.entry_angle[0]) < peak  # above the failure: the ice holds
+
+
 def test_infinitely_deep_terrain_gives_entry_angle_limit_not_nan():
     st = sj.solve_wheel(sj.RigidWheel(1.0, 0.4), sj.BekkerSoil.snow_us(), np.array([1e3, 1e6]), 0.2)
     assert list(np.asarray(st.status)) == [Status.CONVERGED, Status.ENTRY_ANGLE_LIMIT]
