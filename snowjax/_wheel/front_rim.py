@@ -576,10 +576,11 @@ def _closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
 NO_SHEAR_STEPS = 3
 
 
-def _falling_closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
-    """(over, target, lower, upper, s0, secant) of a driven rim's cold start on the front
-    region of a law that can fall (`LayeredSnow`), from its closed-form no-shear load
-    (`_no_shear_load`), for the secant steps of `BracketedSecant`.
+def _falling_closed_form_start(vertical, theta_cap, load, wheel, snow, shear):
+    """(over, target, lower, upper, s0, secant) of a driven rim's cold start (every slip
+    >= 0) on the front region of a law that can fall (`LayeredSnow`), from its
+    closed-form no-shear load (`_no_shear_load`), for the secant steps of
+    `BracketedSecant`.
 
     `general._falling_law_start` wants the shallowest equilibrium from W at the cap, at
     s^2 = 8 and at the breakpoints' angles (three quadratures on `LayeredSnow`).  Here
@@ -829,7 +830,7 @@ class FallingFrontRimRule(FrontRimRule):
             return _falling_law_start(
                 vertical, theta_cap, load, slip, wheel, terrain, distribution, braking
             )
-        return _falling_closed_form_start(vertical, theta_cap, load, slip, wheel, terrain, shear)
+        return _falling_closed_form_start(vertical, theta_cap, load, wheel, terrain, shear)
 
     def contact(
         self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
