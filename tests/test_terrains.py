@@ -433,7 +433,7 @@ def test_layered_wheel_breaks_through_the_ice_and_takes_the_shallowest_equilibri
 
 def test_layered_driven_start_finds_the_shallowest_root_the_shear_alone_carries():
     """A driven rim's cold start on a crust takes the law's closed-form no-shear load and
-    evaluates W only where that cannot decide (`front_rim._falling_closed_form_start`).
+    evaluates W only where that cannot decide (`start._falling_lower_bound_start`).
     A load between the no-shear W and W at the crust's peak is carried before the ice
     breaks only by the shear stress: the solver must return that shallow root (SciPy's
     shallowest), not the deeper one past the drop."""

@@ -59,7 +59,7 @@ import jax
 import jax.numpy as jnp
 
 from .._terrain.base import AbstractTerrain, _half_angle_arc
-from .batchwide import _all_in_batch, _any_in_batch
+from .batchwide import _all_in_batch
 from .distribution import _is_front
 from .general import (
     AnyTerrainRule,
@@ -75,10 +75,9 @@ from .rules import AbstractContactRule
 from .running import _STRAIGHT
 from .start import (
     S_MAX,
-    S_MID,
     _balance_residual,
-    _breakpoint_s,
     _damped_step,
+    _falling_lower_bound_start,
     _newton_s,
     _s_min,
     _surface_stiffness,
@@ -572,125 +571,6 @@ def _closed_form_start(vertical, theta_cap, load, slip, wheel, snow, shear):
     return over, target, lower, upper, s0
 
 
-# Safeguarded Newton steps on the closed-form no-shear balance of a law that can fall.
-NO_SHEAR_STEPS = 3
-
-
-def _falling_closed_form_start(vertical, theta_cap, load, wheel, snow, shear):
-    """(over, target, lower, upper, s0, secant) of a driven rim's cold start (every slip
-    >= 0) on the front region of a law that can fall (`LayeredSnow`), from its
-    closed-form no-shear load (`_no_shear_load`), for the secant steps of
-    `BracketedSecant`.
-
-    `general._falling_law_start` wants the shallowest equilibrium from W at the cap, at
-    s^2 = 8 and at the breakpoints' angles (three quadratures on `LayeredSnow`).  Here
-    those points take the closed form instead, and a quadrature only where it cannot
-    decide: on a driven wheel (slip >= 0) the shear stress only adds to W, so a point
-    whose no-shear load carries the load carries it; W is evaluated at the cap where its
-    no-shear load falls short somewhere in the batch (then the capacity: `over`), and at
-    a breakpoint's angle where it does (whether the shear carries the load before the
-    ice breaks).  The shallow end s^2 = 8 is replaced by S_MAX (W rises monotonically
-    before the first breakpoint, and nothing is known of W there).  Inside the closed
-    form's bracket, `NO_SHEAR_STEPS` safeguarded Newton steps on the no-shear balance
-    (bisection where a step would leave the bracket or W rises with s: just deeper than
-    a breakpoint, where the law has dropped, W dips before it rises again, so such a
-    bracket starts in its middle) give its root s_ns; one quadrature there gives the
-    shear's factor W / W_ns and the secant a point already evaluated (f >= 0 on a driven
-    wheel: the bracket's deep end), and one Newton step of the closed form for load /
-    factor the start (as `_closed_form_start`).  The bracket holds the shallowest
-    crossing of the load between the grid points, as the quadrature grid's.
-
-    `LayeredSnow.ice_layer_example`, thesis tyre, 1-9 kN / 4, slips 0-0.9, one chunk of
-    2,048: the start within 0.43 % of the load in W (median; 7.5 % at most), against 24
-    % from the quadrature grid's interpolation; every element then converges within 4
-    secant steps, where the grid's start left 14 % of the chunk unfinished after 5 (22
-    group steps); over 6,000 random crusts (`tests/random_cases.py`, driven, straight
-    and at slip angles to 60 degrees, 5 % resting on the base) the statuses and roots
-    of the grid's start (sinkage within 2.7e-11 relative).  Two or five Newton steps
-    gave the same solver steps there; three keep one for a bisection.
-    """
-    diameter, width = wheel.diameter, wheel.width
-    s_lo = _s_min(load.dtype)
-    axle = lambda theta0: jnp.zeros_like(theta0)  # noqa: E731  (the front region's deepest)
-    breaks = _breakpoint_s(snow, diameter, theta_cap, axle)
-    cap = jnp.full_like(load, s_lo)
-    points = [cap, *breaks, jnp.full_like(load, S_MID)]
-    s_grid = jax.lax.stop_gradient(jnp.sort(jnp.stack(points), axis=0))
-
-    def no_shear(s):
-        return _no_shear_load(_theta_from_s(s, theta_cap), diameter, width, snow)
-
-    w_ns = jax.vmap(no_shear)(s_grid)
-    # W where the closed form cannot decide: at the cap and the breakpoints' angles (the
-    # grid's points below s^2 = 8), where the no-shear load falls short of the load.
-    exact = jnp.zeros(s_grid.shape, bool)
-    w_grid = w_ns
-    for k in range(s_grid.shape[0] - 1):
-        short = (w_ns[k] < load) & (s_grid[k] < S_MID)
-        w_k = jax.lax.cond(
-            _any_in_batch(short),
-            lambda k=k: vertical(_theta_from_s(s_grid[k], theta_cap)),
-            lambda k=k: w_ns[k],
-        )
-        w_grid = w_grid.at[k].set(jnp.where(short, w_k, w_ns[k]))
-        exact = exact.at[k].set(short)
-    over = ~jnp.any(w_grid >= load, axis=0)
-    target = jnp.where(over, 0.5 * w_grid[0], load)
-    carried = w_grid >= target
-    points_n = s_grid.shape[0]
-    k = jnp.clip(points_n - 1 - jnp.argmax(carried[::-1], axis=0), 0, points_n - 2)[None]
-    pick = lambda x, j: jnp.take_along_axis(x, j, 0)[0]  # noqa: E731
-    lower, upper_ns = pick(s_grid, k), pick(s_grid, k + 1)
-    f_lower = jnp.where(pick(exact, k), _balance_residual(pick(w_grid, k), target), jnp.inf)
-    shallow_known = pick(exact, k + 1)
-    upper = jnp.where(shallow_known, upper_ns, S_MAX)
-    f_upper = jnp.where(shallow_known, _balance_residual(pick(w_grid, k + 1), target), -jnp.inf)
-    # The no-shear root inside the closed form's bracket.
-    f_lo = _balance_residual(pick(w_ns, k), target)
-    f_hi = _balance_residual(pick(w_ns, k + 1), target)
-    frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
-    s_ns = jnp.sqrt(lower**2 + frac * (upper_ns**2 - lower**2))
-    # Just deeper than a breakpoint the law has dropped (W dips there before it rises
-    # again): a bracket whose shallow end is a breakpoint starts in its middle.
-    s_ns = jnp.where(upper_ns < S_MID, 0.5 * (lower + upper_ns), s_ns)
-
-    def residual(s):
-        return _balance_residual(no_shear(s), target)
-
-    def newton(_, carry):  # safeguarded (`BracketedNewton`'s step on the closed form)
-        s, lo, hi, _ = carry
-        f, df = jax.jvp(residual, (s,), (jnp.ones_like(s),))
-        positive = f > 0
-        lo, hi = jnp.where(positive, s, lo), jnp.where(positive, hi, s)
-        step = s - f / jnp.where(df < 0, df, -1.0)
-        # (A step onto the bracket's end is the root itself: |f| at rounding.)
-        inside = (df < 0) & (step >= lo) & (step <= hi)
-        return jnp.where(inside, step, 0.5 * (lo + hi)), lo, hi, df
-
-    zero = jnp.zeros_like(s_ns)
-    s_ns, *_, slope = jax.lax.fori_loop(0, NO_SHEAR_STEPS, newton, (s_ns, lower, upper_ns, zero))
-    # The secant's first slope d f / d s^2, the closed form's where it falls.
-    falling = slope < 0
-    first_slope = jnp.where(falling, slope / (2 * jnp.where(falling, s_ns, 1.0)), -1.0)
-    secant = dict(f_lower=f_lower, f_upper=f_upper, slope=first_slope)
-    s0 = s_ns
-    if shear.mobilises:
-        theta_g = _theta_from_s(s_ns, theta_cap)
-        w_g = vertical(theta_g)
-        factor = jnp.clip(w_g / jnp.maximum(no_shear(s_ns), 1e-30 * target), 0.5, 2.0)
-        s0 = _damped_step(s_ns, jnp.log(factor), slope)
-        # The point evaluated is one end of the bracket, and the secant's first point.
-        f_g = _balance_residual(w_g, target)
-        positive = f_g > 0
-        lower = jnp.where(positive, jnp.maximum(lower, s_ns), lower)
-        upper = jnp.where(positive, upper, jnp.minimum(upper, s_ns))
-        secant["f_lower"] = jnp.where(positive, f_g, secant["f_lower"])
-        secant["f_upper"] = jnp.where(positive, secant["f_upper"], f_g)
-        secant["x_last"], secant["f_last"] = s_ns**2, f_g
-    s0 = jnp.clip(s0, lower, upper)
-    return jax.lax.stop_gradient((over, target, lower, upper, s0, secant))
-
-
 def _flush_tiny_slip(slip):
     """Slips below the input magnitude window (1.2e-77 in float64, 1.1e-10 in float32) are
     0 in value, keeping the gradient 1: the braking quadrature's layout divides by
@@ -804,7 +684,7 @@ class FallingFrontRimRule(FrontRimRule):
     by 2.7e-4.  A layout with braked elements takes the any-terrain rule
     (`general_contact` at the law's `nodes_any_terrain`): the four-panel layout cut at
     the kink erred by 1.1e-6 of W at K = 1 cm.  The cold start of a driven batch comes
-    from the law's closed-form no-shear load (`_falling_closed_form_start`), a braked
+    from the law's closed-form no-shear load (`start._falling_lower_bound_start`), a braked
     one's is the any-terrain rule's on such a law (`general._falling_law_start`: W at a
     few entry angles); both then take secant steps towards the shallowest
     equilibrium."""
@@ -830,7 +710,12 @@ class FallingFrontRimRule(FrontRimRule):
             return _falling_law_start(
                 vertical, theta_cap, load, slip, wheel, terrain, distribution, braking
             )
-        return _falling_closed_form_start(vertical, theta_cap, load, wheel, terrain, shear)
+        no_shear = functools.partial(
+            _no_shear_load, diameter=wheel.diameter, width=wheel.width, terrain=terrain
+        )
+        return _falling_lower_bound_start(
+            vertical, no_shear, theta_cap, load, wheel.diameter, terrain, shear.mobilises
+        )
 
     def contact(
         self, contact, slip, terrain, distribution, law, n, running, braking, vertical_only,
