@@ -352,20 +352,38 @@ def _grid_start(vertical, theta_cap, load, s_grid):
     chunk), one core: the start took 40 ms of a 93 ms solve, now 17 ms of 66 ms (three
     points; a secant step of the batch costs 6 ms), and the first call compiles in 8.7 s
     instead of 9.8 s."""
-    points = s_grid.shape[0]
     w_grid = jax.lax.map(lambda s: vertical(_theta_from_s(s, theta_cap)), s_grid)
+    over, target, deep, shallow = _grid_bracket(w_grid, load)
+    lower, upper = deep(s_grid), shallow(s_grid)
+    f_lo = _balance_residual(deep(w_grid), target)
+    f_hi = _balance_residual(shallow(w_grid), target)
+    return over, target, lower, upper, _chord_root(lower, upper, f_lo, f_hi), f_lo, f_hi
+
+
+def _grid_bracket(w_grid, load):
+    """(over, target, deep, shallow) from W [N] on a grid of each element (shape (points,
+    batch), deep to shallow): `over` where no point carries the load (the target then
+    half of W at the deepest point), and `deep` / `shallow`, functions picking from such
+    a grid the shallowest point that carries the target (kept <= points - 2) and the
+    next."""
+    points = w_grid.shape[0]
     over = ~jnp.any(w_grid >= load, axis=0)
     target = jnp.where(over, 0.5 * w_grid[0], load)
     carried = w_grid >= target
-    # The shallowest grid point that carries the target (largest s), kept <= K - 2.
     k = jnp.clip(points - 1 - jnp.argmax(carried[::-1], axis=0), 0, points - 2)[None]
-    pick = lambda x, j: jnp.take_along_axis(x, j, 0)[0]  # noqa: E731
-    lower, upper = pick(s_grid, k), pick(s_grid, k + 1)
-    f_lo = _balance_residual(pick(w_grid, k), target)
-    f_hi = _balance_residual(pick(w_grid, k + 1), target)
+    return (
+        over,
+        target,
+        lambda x: jnp.take_along_axis(x, k, 0)[0],
+        lambda x: jnp.take_along_axis(x, k + 1, 0)[0],
+    )
+
+
+def _chord_root(lower, upper, f_lo, f_hi):
+    """s where f, linear in s^2 between (lower, f_lo) and (upper, f_hi), crosses 0 (kept
+    in [lower, upper])."""
     frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
-    s0 = jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
-    return over, target, lower, upper, s0, f_lo, f_hi
+    return jnp.sqrt(lower**2 + frac * (upper**2 - lower**2))
 
 
 # Safeguarded Newton steps on the closed-form no-shear balance of a law that can fall.
@@ -430,22 +448,16 @@ def _falling_lower_bound_start(vertical, no_shear, theta_cap, load, diameter, te
         )
         w_grid = w_grid.at[k].set(jnp.where(short, w_k, w_ns[k]))
         exact = exact.at[k].set(short)
-    over = ~jnp.any(w_grid >= load, axis=0)
-    target = jnp.where(over, 0.5 * w_grid[0], load)
-    carried = w_grid >= target
-    points_n = s_grid.shape[0]
-    k = jnp.clip(points_n - 1 - jnp.argmax(carried[::-1], axis=0), 0, points_n - 2)[None]
-    pick = lambda x, j: jnp.take_along_axis(x, j, 0)[0]  # noqa: E731
-    lower, upper_ns = pick(s_grid, k), pick(s_grid, k + 1)
-    f_lower = jnp.where(pick(exact, k), _balance_residual(pick(w_grid, k), target), jnp.inf)
-    shallow_known = pick(exact, k + 1)
+    over, target, deep, shallow = _grid_bracket(w_grid, load)
+    lower, upper_ns = deep(s_grid), shallow(s_grid)
+    f_lower = jnp.where(deep(exact), _balance_residual(deep(w_grid), target), jnp.inf)
+    shallow_known = shallow(exact)
     upper = jnp.where(shallow_known, upper_ns, S_MAX)
-    f_upper = jnp.where(shallow_known, _balance_residual(pick(w_grid, k + 1), target), -jnp.inf)
+    f_upper = jnp.where(shallow_known, _balance_residual(shallow(w_grid), target), -jnp.inf)
     # The no-shear root inside the closed form's bracket.
-    f_lo = _balance_residual(pick(w_ns, k), target)
-    f_hi = _balance_residual(pick(w_ns, k + 1), target)
-    frac = jnp.clip(f_lo / jnp.where(f_lo > f_hi, f_lo - f_hi, 1.0), 0.0, 1.0)
-    s_ns = jnp.sqrt(lower**2 + frac * (upper_ns**2 - lower**2))
+    f_lo = _balance_residual(deep(w_ns), target)
+    f_hi = _balance_residual(shallow(w_ns), target)
+    s_ns = _chord_root(lower, upper_ns, f_lo, f_hi)
     # Just deeper than a breakpoint the law has dropped (W dips there before it rises
     # again): a bracket whose shallow end is a breakpoint starts in its middle.
     s_ns = jnp.where(upper_ns < S_MID, 0.5 * (lower + upper_ns), s_ns)
