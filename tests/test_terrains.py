@@ -143,6 +143,23 @@ def test_driven_rims_one_graded_panel_match_adaptive_quadrature(kind, wong_reece
     _check_contact_against_quad(kind, cases, wong_reece)
 
 
+@pytest.mark.parametrize("share", [(0.25, 0.45), (0.2, 0.45)])
+def test_driven_rims_on_wong_snow_with_wong_reece_match_adaptive_quadrature(share):
+    """A driven batch on Wong snow with Wong-Reece, entry angles up to 0.99999 of the
+    base's (a log singularity of the stress at the base): where every element's theta_m /
+    theta0 is at least `general.SMOOTH_SHARE` (0.25) the mirrored panel is one graded
+    towards the entry (`_mirrored_smooth_start`), else the batch takes two half-panels;
+    W, R, T, M within 1e-7 of quad either way (one panel at a share of 0.2 errs by 2.2e-7,
+    at 0.1 by 2.3e-6)."""
+    cases = random_cases("wong", 12, seed=13)
+    rng = np.random.default_rng(14)
+    for c in cases:
+        c["slip"], c["c3"] = rng.uniform(0.0, 0.9), 0.0
+        c["c1"], c["c2"] = rng.uniform(*share), rng.uniform(0.0, 0.02)
+        c["th"] = rng.uniform(0.9, 0.99999) * math.acos(1 - 2 * c["z_w"] / c["D"])
+    _check_contact_against_quad("wong", cases, True)
+
+
 def test_driven_layered_rims_take_the_closed_form_rule_and_match_adaptive_quadrature():
     """A driven batch on layered snow's front region takes the closed-form rule
     (`FallingFrontRimRule`: its two layers' integrals in closed form, panels cut at the
