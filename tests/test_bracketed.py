@@ -169,6 +169,37 @@ def test_the_predicted_stop_needs_two_newton_steps_in_the_quadratic_regime():
     np.testing.assert_array_equal(np.asarray(new_y), [1e-5, 1e-5, 1e-5, 2e-3, 0.0])
 
 
+def test_one_newton_step_ends_an_element_within_the_reach_of_a_loose_tolerance():
+    """With `one_step`, a Newton step from |f| <= sqrt(0.1 atol) counts as converged (its
+    next residual is C f^2 <= 0.1 atol where C <= 1); a step from just beyond does not,
+    nor does a bisection, nor the same step without `one_step`."""
+    atol = 1e-6
+    reach = np.sqrt(0.1 * atol)  # 3.16e-4
+    f_now = jnp.array([0.9 * reach, 1.1 * reach, 0.9 * reach])
+    bracket = (jnp.full(3, -1.0), jnp.array([1.0, 1.0, 1e-5]))  # 2: the step leaves it
+    no = jnp.zeros(3, bool)
+    previous = _BracketState(*bracket, jnp.full(3, 1e-2), jnp.full(3, 1e-2), no, no, no)
+    for one_step, expected in ((True, [True, False, False]), (False, [False] * 3)):
+        solver = BracketedNewton(rtol=atol, atol=atol, one_step=one_step)
+        # f(z) = f_now - z: the Newton step goes to f_now (element 2 bisects instead).
+        _, state, _ = solver.step(
+            lambda z, _: (f_now - z, None), jnp.zeros(3), None, {}, previous, None
+        )
+        assert np.asarray(state.converged).tolist() == expected
+    # On a residual whose C is known, the step's result is within 0.1 atol:
+    # f(y) = e^-y - a, C = |f''| / (2 f'^2) = 1 / (2 e^-y) ~ 0.5 at the root y = 0.
+    a = jnp.full(4, 1.0)
+    start = jnp.array([0.9, 0.5, 0.1, 0.02]) * reach
+
+    def residual(y, a):
+        return jnp.exp(-y) - a
+
+    y, _ = solve_elementwise(
+        residual, start, jnp.full(4, -1.0), jnp.full(4, 1.0), a, atol, 8, one_step=True
+    )
+    assert np.all(np.abs(np.asarray(residual(y, a))) <= 0.1 * atol)
+
+
 def test_the_secant_finds_roots_and_its_paths_agree():
     """`BracketedSecant` (f alone at each step) on the same non-monotone residuals: every
     element within the tolerance of a root, Newton's where the root is unique (b c <=

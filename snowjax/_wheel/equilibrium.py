@@ -105,11 +105,16 @@ class WheelState(eqx.Module):
 # ---------------------------------------------------------------------------------------
 
 
-def _tolerance(dtype) -> float:
+def _tolerance(dtype, accuracy: str = "reference") -> float:
     # The solvers stop once |ln(W / F_z)| < tol at the iterate before their last step (or
     # the last steps predict it below tol / 10), so the returned root is balanced below
-    # tol (typically 1e-15 in float64 after Newton, 1e-11 after secant steps).
-    return 1e-9 if dtype == jnp.float64 else 2e-5
+    # tol (typically 1e-15 in float64 after Newton, 1e-11 after secant steps).  The
+    # simulator accuracy's quadrature errs by up to ~3e-4 of the load: its solves stop
+    # at 1e-6 in float64 (Newton after one step from |f| <= 3.2e-4,
+    # `bracketed._finished`), balanced within 1e-5 (`_solve_layout`'s check).
+    if dtype != jnp.float64:
+        return 2e-5
+    return 1e-6 if accuracy == "simulator" else 1e-9
 
 
 def _entry_angle_cap(depth, diameter):
@@ -154,12 +159,12 @@ def _solve_layout(
     terms, have leaves per element.
     Returns (theta0, R, T, M, F_y, M_z, status).
     """
-    shear, n, max_steps, rule = options
+    shear, n, max_steps, rule, accuracy = options
     # Everything up to the root carries no derivative (`_root_outputs` supplies it there):
     # the solve runs on stopped copies of the inputs.
     differentiable = (wheel, terrain, distribution, load, slip, running, terms)
     wheel, terrain, distribution, load, slip, running, terms = jax.lax.stop_gradient(differentiable)
-    tol = _tolerance(load.dtype)
+    tol = _tolerance(load.dtype, accuracy)
     reach = type(wheel).deepest_reach(wheel, terrain)
     theta_cap, reaches_base = _entry_angle_cap(reach, wheel.diameter)
     contact = functools.partial(
@@ -207,6 +212,7 @@ def _solve_layout(
         tol,
         max_steps,
         secant,
+        one_step=accuracy == "simulator",
     )
     if secant:
         # The power-law start holds no element at the cap: one that ended on it is
@@ -333,10 +339,10 @@ def _solve_jit(wheel, terrain, distribution, terms, load, slip, guess, running, 
     """The solve of `solve_wheel` (checked inputs of any shape): `WheelState`.
 
     `running` is `Straight()` or a `SlipAngle` (`running.py`); `options` = (shear law,
-    nodes, max_steps, the contact rule's class), static; `layout` "driving", "braking" or
-    "auto" (`_with_rule_for`).
+    nodes, max_steps, the contact rule's class, the accuracy), static; `layout` "driving",
+    "braking" or "auto" (`_with_rule_for`).
     """
-    shear, n, max_steps, rule_type = options
+    shear, n, max_steps, rule_type, accuracy = options
     rule = rule_type()
     trees = (wheel, terrain, distribution, terms, load, slip, guess, running)
     shape, dtype, trees = _broadcast_leaves(*trees)
@@ -354,7 +360,7 @@ def _solve_jit(wheel, terrain, distribution, terms, load, slip, guess, running, 
     def solve_with(ops):  # ops[0]: the wheel, or its round rim
         def layout_solve(braking):
             return _solve_layout(
-                *ops, options=(shear, n[braking], max_steps, rule), braking=braking
+                *ops, options=(shear, n[braking], max_steps, rule, accuracy), braking=braking
             )
 
         return _with_rule_for(ops[4], shear, layout_solve, layout)
@@ -442,14 +448,17 @@ def solve_wheel(
         defaults classic 10 + 10 (two panels) and 10 + 10 + 10 + 8 (four), simplified
         24 + 24 and 4 x 16, none 8 + 8.  Other terrains / Wong–Reece: 12 nodes per
         half-panel, 16 when the batch brakes; a driven rim on a law without a base or
-        breakpoints (and a driven tyre's arc beyond its flat there) is one panel graded
-        towards its entry, of ceil(5 n / 3) nodes for n per half-panel (20 by
-        default).  With the defaults every contact integral is within 1e-7 (relative)
-        of adaptive quadrature over the documented range.  An integer sets all.
+        breakpoints (and a driven tyre's arc beyond its flat there), and on Wong snow
+        with Wong–Reece a driven rim whose theta_m is at least a quarter of theta0
+        (every element of the batch), is one panel graded towards its entry, of
+        ceil(5 n / 3) nodes for n per half-panel (20 by default).  With the defaults
+        every contact integral is within 1e-7 (relative) of adaptive quadrature over
+        the documented range.  An integer sets all.
       - `accuracy`: `"reference"` (the defaults above) or `"simulator"` (6 nodes per
-        panel of Wong snow's front-region rule, 8 per half-panel of the others: errors
-        up to ~3e-4 of the load over random cases, ~1e-8 typically, for vehicle
-        simulations and RL; measured in the performance guide).
+        panel of Wong snow's front-region rule, 8 per half-panel of the others, and a
+        solver tolerance of 1e-6 instead of 1e-9: errors up to ~3e-4 of the load over
+        random cases, ~1e-8 typically, for vehicle simulations and RL; measured in the
+        performance guide).
     - `load`: vertical wheel load F_z [N], > 0.
     - `slip`: driving slip i [-] in [-1, 1] (eq. 2.6: 0 free rolling, 1 spinning in
       place).  Negative slip is braking: the shear displacement, and with it the shear
@@ -558,7 +567,7 @@ def solve_wheel(
     # every eager call.  The rule travels as its class: a module among the arguments
     # costs the compiled function's dispatch ~5 us per call (flattened and hashed).
     nodes = type(rule).nodes(rule, shear, model.nodes_per_panel, model.accuracy)
-    options = (shear, nodes, int(max_steps), type(rule))
+    options = (shear, nodes, int(max_steps), type(rule), model.accuracy)
     layout = _layout(slip, warm_start=rule.warm_layout and initial_entry_angle is not None)
     state = _solve_jit(
         wheel,

@@ -79,8 +79,10 @@ class ContactModel(eqx.Module):
       quadrature nodes (the shear law's `nodes_simulator`: 6 per panel of Wong snow's
       closed-form rule, 8 per half-panel of the any-terrain rule (14 on a contact that
       is one panel graded towards its entry), against 10 and 12-16 (20)),
-      for errors up to ~3e-4 of the load and ~1e-8 typically (the worst and median over
-      random cases of every law, and the speed it buys, are in the performance guide).
+      and a solver tolerance of 1e-6 on ln(W / F_z) instead of 1e-9 (a warm-started
+      simulation step then ends after one Newton step), for errors up to ~3e-4 of the
+      load and ~1e-8 typically (the worst and median over random cases of every law,
+      and the speed it buys, are in the performance guide).
       `nodes_per_panel`, where given, sets the nodes instead.
 
     A module like the terrain: its array leaves (the terrain's and the distribution's
