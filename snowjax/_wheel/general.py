@@ -340,8 +340,8 @@ def general_contact(
 
     def total(at_nodes):  # the terms' sum at the nodes `at_nodes` gives
         nodes = _contact_nodes(contact, slip, terrain, running, *at_nodes)
-        total = _total(running.terms(law) + tuple(terms), nodes)
-        return total.vertical_load if vertical_only else total.astuple()
+        summed = _total(running.terms(law) + tuple(terms), nodes)
+        return summed.vertical_load if vertical_only else summed.astuple()
 
     if distribution.mirrors_rear:
 
