@@ -176,7 +176,8 @@ class Rut(AbstractTerrain):
     def _reloading(self, sinkage, d, width) -> Array:
         """The reloading line's sigma' = p_u z' / d [Pa] at the sinkage z' [m] below the
         floor, d [m] the `reloading_depth` (0 for a rut of no reloading depth)."""
-        return self._loaded_pressure(width) * sinkage / jnp.where(d > 0, d, 1.0)
+        # The slope first: one product per point (a quadrature calls this at every node).
+        return (self._loaded_pressure(width) / jnp.where(d > 0, d, 1.0)) * sinkage
 
     def _loaded_pressure(self, width) -> Array:
         """p_u [Pa]: the virgin law's pressure at the rut's depth z_u (0 where it is

@@ -41,8 +41,12 @@ A law with one kink (a `Rut` on Wong snow, whose reloading line meets the virgin
 the sinkage d) has a panel end there (`_nodes`: three panels driving, the braking panel
 that holds it cut in two), which moves with the kink for derivatives (`_moving`); its closed forms
 include the reloading line's share.  Measured against SciPy (quad + brentq on the rut's
-law) over 28 random ruts, driven and braked: within 6e-12.  A law whose pressure drops at
-its one breakpoint (`LayeredSnow`, where the ice breaks) has the same panel end there,
+law) over 28 random ruts, driven and braked: within 6e-12.  The solver's W
+(`vertical_only`) holds every node fixed, the kink's too: its one derivative, the
+Newton tangent in theta0, is the same to the quadrature's accuracy (the stress is
+continuous at the kink, so the Leibniz terms of the panels that meet there cancel, and
+it is 0 at the entry; `tests/test_rut.py`).  A law whose pressure drops at its one
+breakpoint (`LayeredSnow`, where the ice breaks) has the same panel end there,
 driving the next panel graded towards it (`_nodes`, `jumps`); c, tan phi and K are then
 those of each node's layer (`_strength_varies`).
 
@@ -419,8 +423,10 @@ def _closed_form_contact(
     )  # fmt: skip
     # With `moving_rule` the rule moves with theta0 (a factor 1 in value), so that
     # derivatives w.r.t. theta0 of every order are those of the rule on [0, theta0]; a
-    # kink's panels move with it.
-    theta, weight = _moving(theta, weight, theta0, kinks, pieces, moving_rule)
+    # kink's panels move with it, except in the solver's W (module docstring: a law
+    # whose stress is continuous at the kink).
+    if not (vertical_only and terrain.pressure_rises()):
+        theta, weight = _moving(theta, weight, theta0, kinks, pieces, moving_rule)
 
     half_sin, half_cos = _sincos_half(theta)
     sin = 2 * half_sin * half_cos
