@@ -120,6 +120,14 @@ class AbstractTerrain(eqx.Module):
         lowest point of a front-region contact, where a law such as Wong's diverges."""
         return type(self).depth is not AbstractTerrain.depth
 
+    def logarithmic_base(self) -> bool:
+        """Whether the law's pressure diverges at most like -ln(clearance) at its base
+        (static; default False: not known, e.g. a pole).  The any-terrain rule then
+        covers a front-region contact whose lowest point lies far from the base with one
+        panel (`general._far_front_base`), where a stronger singularity keeps a short
+        panel of its own next to the lowest point."""
+        return False
+
     def breakpoint_sinkages(self) -> tuple[Array, ...]:
         """Sinkages [m] where the pressure–sinkage law has a kink or a jump (none)."""
         return ()

@@ -90,6 +90,10 @@ class LayeredSnow(AbstractTerrain):
         """(z_f,): the sinkage [m] where the ice breaks and the pressure drops."""
         return (self.failure_sinkage,)
 
+    def logarithmic_base(self) -> bool:
+        """True: the bottom layer's Wong law at the frozen ground."""
+        return True
+
     def pressure_rises(self) -> bool:
         """False: the pressure drops where the ice breaks (static)."""
         return False

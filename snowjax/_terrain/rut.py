@@ -257,6 +257,10 @@ class Rut(AbstractTerrain):
         """The virgin law's base, nearer by the floor's depth."""
         return self.virgin.has_base()
 
+    def logarithmic_base(self) -> bool:
+        """The virgin law's base (the reloading line is finite)."""
+        return self.virgin.logarithmic_base()
+
     def pressure_rises(self) -> bool:
         """The reloading line rises, so the law rises where the virgin law does."""
         return type(self.virgin).pressure_rises(self.virgin)

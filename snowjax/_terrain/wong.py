@@ -140,6 +140,10 @@ class WongSnow(AbstractTerrain):
         """z_w: the asymptotic sinkage, the depth of the ice layer or frozen base [m]."""
         return self.z_w
 
+    def logarithmic_base(self) -> bool:
+        """True: -p_w ln(clearance / z_w) at the base."""
+        return True
+
     def sinkage_at_pressure(self, pressure, width, limit):
         """Wong's law (2.2) in closed form, `z = z_w [1 - exp(-sigma / p_w)]` [m] (below
         the base for every pressure), capped at `limit` [m]."""
