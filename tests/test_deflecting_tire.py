@@ -507,7 +507,7 @@ def test_round_treads_never_evaluate_the_tyres_contact(monkeypatch):
 def test_beyond_a_flat_far_from_the_base_the_contact_is_one_panel():
     """On a law with a base the front region's contact beyond its lowest point (the
     flat's front end, the axle on a round tread) is one panel graded towards theta0
-    where the base's log singularity lies at least a third of that panel away from it
+    where the base's log singularity lies at least half that panel away from it
     (`general._far_front_base`), else it starts with a short panel of its own.  Driven
     tyres on Wong snow, soft (far: one panel) and stiff next to the base (not far),
     each alone and the three in one batch (not far: the short panel for all): W, R, T

@@ -605,8 +605,9 @@ def _far_front_base(contact, slip, terrain, distribution, law, braking):
     """Whether a front-region contact on a law with a base needs no panel at its lowest
     point (`_direct_nodes`' `far`): False (static) off the front region, without a base
     or where it is not known to be logarithmic (`AbstractTerrain.logarithmic_base`: on
-    a law with a pole there, sigma = k z / (1 - z / h), a rim's one panel at this share
-    erred by 8.7e-6 of the load where the short panel's layout erred by 2.5e-7), or
+    a law with a pole there, sigma = k z / (1 - z / h), a rim's one panel erred by
+    3.3e-7 of the load at this share and 8.7e-6 at a third, where the short panel's
+    layout erred by 2.5e-7: 40 random driven rims), or
     where the contact is cut inside (a braking split, a break of its shape, a breakpoint
     of the law); else, per element, whether the base's log singularity lies at least
     `FAR_BASE` of the panel [theta_s, theta0] from its lower end theta_s (the lowest
