@@ -513,8 +513,10 @@ def test_beyond_a_flat_far_from_the_base_the_contact_is_one_panel():
     each alone and the three in one batch (not far: the short panel for all): W, R, T
     and M / r within 1e-7 of the load of SciPy's quad on the tyre's equations (measured:
     the one panel within 1.2e-10 alone, the batch's short panel 7.7e-10 on the soft ones
-    and 7.1e-8 of W on the stiff one, next to the base).  With every contact one panel
-    (the share 0) the stiff tyre's W is off by 2.3e-3."""
+    and 7.1e-8 of W on the stiff one, next to the base).  The soft tyres' W alone and in
+    the batch differ (the two layouts: 2.2e-10 of the load and more), so a wiring that
+    never took the one panel fails here.  With every contact one panel (the share 0) the
+    stiff tyre's W is off by 2.3e-3."""
     from snowjax._wheel.general import _far_front_base
     from snowjax._wheel.shear_law import _shear_law
 
@@ -542,3 +544,6 @@ def test_beyond_a_flat_far_from_the_base_the_contact_is_one_panel():
             )
             for value, expected in zip(got, (w, r, t, m / (D / 2))):
                 assert abs(float(value) - expected) <= 1e-7 * w, (k, float(value), expected)
+        if far[k]:  # one panel alone, the short panel's layout in the mixed batch
+            gap = abs(float(alone.vertical_load) - float(batch.vertical_load[k]))
+            assert gap > 1e-12 * w, (k, gap)
