@@ -547,3 +547,50 @@ def test_beyond_a_flat_far_from_the_base_the_contact_is_one_panel():
         if far[k]:  # one panel alone, the short panel's layout in the mixed batch
             gap = abs(float(alone.vertical_load) - float(batch.vertical_load[k]))
             assert gap > 1e-12 * w, (k, gap)
+
+
+def test_driven_tyres_with_wong_reece_take_a_panel_per_piece(monkeypatch):
+    """Under Wong-Reece a driven tyre's contact is cut in the stress angle at its flat's
+    ends, and each piece is one panel clustered at both its ends (`general._cut_panels`;
+    the SciPy test above brakes, so its batches keep the half-panels).  Eight random
+    driven tyres on Wong snow (p_i 20 kPa-1 MPa, K 2-30 mm, c3 0 or down to -0.1, entry
+    angles to 0.995 of the cap; one batch, rigid and elastic modes): W, R, T and M / r
+    within 2e-7 of the load of SciPy's quad on the tyre's equations (measured over 80
+    such tyres: 1.4e-7, on rigid-mode tyres, whose error lies in the piece at the entry
+    with the half-panels too).  The clustering at the cuts is guarded on layered snow
+    (`test_terrains.py`), where a panel without it errs by 3e-4."""
+    from snowjax._wheel import general
+
+    taken = []
+    cut_panels = general._cut_panels
+    monkeypatch.setattr(general, "_cut_panels", lambda *a: taken.append(True) or cut_panels(*a))
+    rng = np.random.default_rng(31)
+    m = 8
+    cap = 2 * math.asin(math.sqrt(float(SNOW.z_w) / D))
+    p_i = np.exp(rng.uniform(math.log(2e4), math.log(1e6), m))
+    modulus = rng.uniform(0.002, 0.03, m)
+    slip = rng.uniform(0.0, 0.9, m)
+    c1, c2 = rng.uniform(0.3, 0.45, m), rng.uniform(0.2, 0.4, m)
+    c3 = np.where(rng.uniform(size=m) < 0.5, 0.0, -rng.uniform(0.001, 0.1, m))
+    theta0 = rng.uniform(0.1, 0.995, m) * cap
+    snow = sj.WongSnow(SNOW.p_w, SNOW.z_w, SNOW.cohesion, SNOW.tan_phi, modulus)
+    model = sj.ContactModel(snow, sj.WongReece(c1, c2, c3))
+    forces = sj.contact_forces(_tire(p_i), model, theta0, slip)
+    assert taken
+    deflection = np.asarray(_tire(p_i).deflection(theta0, snow))
+    assert deflection.min() < 1e-6 and deflection.max() > 0.01  # both modes
+    law = _reference_law(SNOW)
+    c, tan_phi = float(SNOW.cohesion), float(SNOW.tan_phi)
+    for k in range(m):
+        w, r, t, moment = ref.contact(
+            theta0[k], slip[k], D, B, law, c, tan_phi, modulus[k], p_i[k] + CARCASS, 30.0,
+            c1[k] + c2[k] * slip[k], c3[k],
+        )  # fmt: skip
+        got = (
+            forces.vertical_load[k],
+            forces.motion_resistance[k],
+            forces.thrust[k],
+            forces.torque[k] / (D / 2),
+        )
+        for value, expected in zip(got, (w, r, t, moment / (D / 2))):
+            assert abs(float(value) - expected) <= 2e-7 * w, (k, float(value), expected)

@@ -451,7 +451,9 @@ def solve_wheel(
         breakpoints (and a driven tyre's arc beyond its flat there), and on Wong snow
         with Wong–Reece a driven rim whose theta_m is at least a quarter of theta0
         (every element of the batch), is one panel graded towards its entry, of
-        ceil(5 n / 3) nodes for n per half-panel (20 by default).  With the defaults
+        ceil(5 n / 3) nodes for n per half-panel (20 by default); a driven contact
+        under Wong–Reece cut inside (a tyre's flat, layered snow's ice) takes n nodes
+        on each piece and ceil(5 n / 3) on the piece at the entry.  With the defaults
         every contact integral is within 1e-7 (relative) of adaptive quadrature over
         the documented range.  An integer sets all.
       - `accuracy`: `"reference"` (the defaults above) or `"simulator"` (6 nodes per

@@ -75,7 +75,9 @@ class AbstractShearLaw(eqx.Module):
     nodes_closed_form: ClassVar[tuple[int, tuple[int, int, int, int]]] = (10, (10, 10, 10, 8))
     #: Default nodes per half-panel of the any-terrain rule (without, with braking); None:
     #: the law has no any-terrain rule.  A contact that is one panel with a smooth lower
-    #: end takes ceil(5 n / 3) nodes on it instead (`general._graded_panel`).
+    #: end takes ceil(5 n / 3) nodes on it instead (`general._graded_panel`), and a
+    #: driven one cut inside under Wong–Reece n on each piece, ceil(5 n / 3) on the
+    #: piece at the entry (`general._cut_panels`).
     nodes_any_terrain: ClassVar[tuple[int, int] | None] = (12, 16)
     #: Nodes at the simulator accuracy (`ContactModel(accuracy="simulator")`): on every
     #: panel of the closed-form rule, and on every half-panel of the any-terrain rule
