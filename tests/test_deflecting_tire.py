@@ -564,6 +564,7 @@ def test_driven_tyres_with_wong_reece_take_a_panel_per_piece(monkeypatch):
     taken = []
     cut_panels = general._cut_panels
     monkeypatch.setattr(general, "_cut_panels", lambda *a: taken.append(True) or cut_panels(*a))
+    jax.clear_caches()  # traced afresh, whatever compiled these shapes before
     rng = np.random.default_rng(31)
     m = 8
     cap = 2 * math.asin(math.sqrt(float(SNOW.z_w) / D))
