@@ -195,13 +195,12 @@ def _cut_panels(points, start, theta0, entry_scale, n):
     angles, _ = _panel_ends(points, start, theta0, entry_scale, beyond_to_start=True)
     dtype = theta0.dtype
     u, du = _smoothstep_map(*_rule(n, dtype))
-    xs, ws = [], []
-    for k in range(angles.shape[0] - 2):
-        lo, hi = angles[k], angles[k + 1]
-        xs.append(lo + (hi - lo) * u)
-        ws.append((hi - lo) * du)
+    lo, length = angles[:-2, None], (angles[1:-1] - angles[:-2])[:, None]  # inner pieces
     last, last_weight = _graded_panel(angles[-2], theta0, entry_scale, n, dtype, both_ends=True)
-    return jnp.concatenate([*xs, last]), jnp.concatenate([*ws, last_weight])
+    return (
+        jnp.concatenate([(lo + length * u).reshape(-1), last]),
+        jnp.concatenate([(length * du).reshape(-1), last_weight]),
+    )
 
 
 def _graded_half_panels(lo, hi, scale_lo, scale_hi, n, dtype, log_end=None):
@@ -612,14 +611,16 @@ def _mirrored_nodes(contact, slip, terrain, distribution, law, n, braking, entry
 
     points = [(theta_m, inf), (theta0, entry_scale)]
     points += [(star(angle), inf) for angle in contact.panel_ends(distribution, slip)]
-    if braking and law.mobilises:
-        split, width = _braking_point(theta_r, slip, contact, terrain, distribution)
+    split = braking and law.mobilises
+    if split:
+        angle, width = _braking_point(theta_r, slip, contact, terrain, distribution)
         # A split behind theta_m: its layer's width in theta*.
-        behind = split < theta_m
-        points.append((star(split), jnp.where(behind, width / jnp.maximum(ratio, 1e-12), width)))
+        behind = angle < theta_m
+        points.append((star(angle), jnp.where(behind, width / jnp.maximum(ratio, 1e-12), width)))
     points += [(theta_f, inf) for theta_f in _breakpoint_angles(contact, terrain)]
-    cuts = not (braking and law.mobilises)
-    front, weight = _panel_nodes(points, theta_m, theta0, entry_scale, n, smooth, smooth_cuts=cuts)
+    front, weight = _panel_nodes(
+        points, theta_m, theta0, entry_scale, n, smooth, smooth_cuts=not split
+    )
     rear = theta_r + (theta0 - front) * ratio
     theta = jnp.concatenate([front, rear])
     geometry = _contact_points(contact, theta)
